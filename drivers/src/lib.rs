@@ -1,0 +1,8 @@
+//! Sensor I/O for EventTrack6D.
+//!
+//! Event-camera stream formats (EVT 3.0, EVT 2.0, EVT 2.1) with streaming decoders and encoders, `.raw`
+//! files, the recording directory format, and the trigger timeline that places depth frames and pose
+//! ticks on the event camera's clock. Depends on nothing else in the workspace.
+
+pub mod anomaly;
+pub mod event;

@@ -1,0 +1,2 @@
+//! Trigger firmware schedule core (to be built out by the firmware issue).
+#![no_std]

@@ -1,0 +1,1 @@
+//! Hardware-in-the-loop simulator for EventTrack6D.

@@ -1,0 +1,1 @@
+//! EventTrack6D tracker library.
