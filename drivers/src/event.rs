@@ -41,7 +41,12 @@ pub trait EventSink {
         while m != 0 {
             let i = m.trailing_zeros() as u16;
             m &= m - 1;
-            self.cd(CdEvent { t_us, x: x_base + i, y, polarity });
+            self.cd(CdEvent {
+                t_us,
+                x: x_base + i,
+                y,
+                polarity,
+            });
         }
     }
 
@@ -146,5 +151,21 @@ impl EventSink for EventCounter {
         let ch = usize::from(edge.channel & 31);
         self.trigger_edges[ch][usize::from(!edge.rising)] += 1;
         self.see(edge.t_us);
+    }
+}
+
+/// Sensor pixel-array size. Events outside it are counted as anomalies and skipped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Geometry {
+    /// Columns.
+    pub width: u16,
+    /// Rows.
+    pub height: u16,
+}
+
+impl Geometry {
+    /// A `width` x `height` sensor.
+    pub const fn new(width: u16, height: u16) -> Self {
+        Self { width, height }
     }
 }

@@ -6,3 +6,5 @@
 
 pub mod anomaly;
 pub mod event;
+pub mod formats;
+pub mod raw;
