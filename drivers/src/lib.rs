@@ -8,3 +8,4 @@ pub mod anomaly;
 pub mod event;
 pub mod formats;
 pub mod raw;
+pub mod timeline;
