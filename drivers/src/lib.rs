@@ -8,4 +8,5 @@ pub mod anomaly;
 pub mod event;
 pub mod formats;
 pub mod raw;
+pub mod recording;
 pub mod timeline;
