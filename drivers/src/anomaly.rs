@@ -9,10 +9,6 @@ pub enum AnomalyKind {
     UnknownType,
     /// A CD event whose column or row lies outside the sensor geometry.
     OutOfBounds,
-    /// An EVT3 vector word with no `VECT_BASE_X` since the last row change.
-    VectorWithoutBase,
-    /// An EVT3 event word with no row (`ADDR_Y`) seen since synchronisation.
-    EventWithoutRow,
     /// A time-high word that jumps backwards by less than a wrap but more than the sensor's jitter.
     TimeJumpBack,
     /// An EVT3 `CONTINUED` word that does not follow an `OTHERS` or `IMU` word.
@@ -23,11 +19,9 @@ pub enum AnomalyKind {
 
 impl AnomalyKind {
     /// All kinds, in report order.
-    pub const ALL: [AnomalyKind; 7] = [
+    pub const ALL: [AnomalyKind; 5] = [
         AnomalyKind::UnknownType,
         AnomalyKind::OutOfBounds,
-        AnomalyKind::VectorWithoutBase,
-        AnomalyKind::EventWithoutRow,
         AnomalyKind::TimeJumpBack,
         AnomalyKind::OrphanContinued,
         AnomalyKind::TruncatedWord,
@@ -38,8 +32,6 @@ impl AnomalyKind {
         match self {
             AnomalyKind::UnknownType => "unknown_type",
             AnomalyKind::OutOfBounds => "out_of_bounds",
-            AnomalyKind::VectorWithoutBase => "vector_without_base",
-            AnomalyKind::EventWithoutRow => "event_without_row",
             AnomalyKind::TimeJumpBack => "time_jump_back",
             AnomalyKind::OrphanContinued => "orphan_continued",
             AnomalyKind::TruncatedWord => "truncated_word",
@@ -59,7 +51,8 @@ impl fmt::Display for AnomalyKind {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct DecodeAnomalies {
     counts: [u64; AnomalyKind::ALL.len()],
-    /// Words before the first time-high word (a stream that starts mid-group). Not an anomaly.
+    /// Words that need state not yet seen: before the first time-high word, or (EVT3) CD words before the first
+    /// row / vector base after it. A stream that starts mid-group does this; it is not an anomaly.
     pub skipped_before_sync: u64,
     /// Vendor words that carry no CD or trigger data (`OTHERS`, `CONTINUED`, `IMU`). Not an anomaly.
     pub ignored_vendor_words: u64,

@@ -9,4 +9,5 @@ pub mod event;
 pub mod formats;
 pub mod raw;
 pub mod recording;
+pub mod summary;
 pub mod timeline;

@@ -1,0 +1,201 @@
+//! `eventtrack6d convert`: between EVT 3.0, EVT 2.0, EVT 2.1 and CSV, streaming in constant memory.
+
+use anyhow::{Context, bail};
+use clap::{Args, ValueEnum};
+use drivers::event::{EventBuffer, Geometry};
+use drivers::formats::any::EventFormat;
+use drivers::formats::csv::{EventCsvParser, write_events, write_header};
+use drivers::formats::evt21::WordOrder;
+use drivers::raw::{RawHeader, RawReader, RawWriter};
+use std::fs::File;
+use std::io::{BufWriter, Read, Write};
+use std::path::{Path, PathBuf};
+
+/// Convert an event file between EVT 3.0, EVT 2.0, EVT 2.1 (`.raw`) and CSV (`t_us,x,y,p`).
+///
+/// The output format is `--to`, or else taken from OUT's extension: `.csv` CSV, `.evt2` EVT 2.0, `.evt21`
+/// EVT 2.1, `.raw` / `.evt3` EVT 3.0. The input format is read from the `.raw` header, or CSV for `.csv`.
+/// Trigger edges cannot be written to CSV: their count is reported.
+#[derive(Debug, Args)]
+pub struct ConvertArgs {
+    /// Input file (`.raw` with a header, or `.csv`).
+    pub input: PathBuf,
+    /// Output file (overwritten).
+    pub output: PathBuf,
+    /// Output format (default: from OUT's extension).
+    #[arg(long, value_enum)]
+    pub to: Option<OutputFormat>,
+    /// Sensor size `WIDTHxHEIGHT` for a `.raw` written from CSV (default 1280x720).
+    #[arg(long, value_parser = parse_geometry)]
+    pub geometry: Option<Geometry>,
+}
+
+/// Output encodings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum OutputFormat {
+    /// EVT 3.0 `.raw`.
+    Evt3,
+    /// EVT 2.0 `.raw`.
+    Evt2,
+    /// EVT 2.1 `.raw` in the IMX636's (legacy) word order.
+    Evt21,
+    /// `t_us,x,y,p` text.
+    Csv,
+}
+
+fn parse_geometry(s: &str) -> Result<Geometry, String> {
+    let (w, h) = s.split_once('x').ok_or("expected WIDTHxHEIGHT, e.g. 1280x720")?;
+    let w: u16 = w.parse().map_err(|_| format!("width `{w}` is not an integer"))?;
+    let h: u16 = h.parse().map_err(|_| format!("height `{h}` is not an integer"))?;
+    if w == 0 || h == 0 || w > 2048 || h > 2048 {
+        return Err("each dimension must be 1..2048".into());
+    }
+    Ok(Geometry::new(w, h))
+}
+
+fn output_format(args: &ConvertArgs) -> anyhow::Result<OutputFormat> {
+    if let Some(f) = args.to {
+        return Ok(f);
+    }
+    let ext = args.output.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    Ok(match ext.as_str() {
+        "csv" => OutputFormat::Csv,
+        "evt2" => OutputFormat::Evt2,
+        "evt21" => OutputFormat::Evt21,
+        "raw" | "evt3" => OutputFormat::Evt3,
+        _ => bail!(
+            "{}: cannot tell the output format from the extension `.{ext}`; use --to evt3|evt2|evt21|csv",
+            args.output.display()
+        ),
+    })
+}
+
+/// Where converted records go.
+enum Sink {
+    Csv(BufWriter<File>),
+    Raw(RawWriter<BufWriter<File>>),
+}
+
+impl Sink {
+    fn create(path: &Path, format: OutputFormat, geometry: Geometry, source: &str) -> anyhow::Result<Self> {
+        let file = File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
+        let mut out = BufWriter::with_capacity(1 << 20, file);
+        let encoding = match format {
+            OutputFormat::Csv => {
+                write_header(&mut out)?;
+                return Ok(Sink::Csv(out));
+            }
+            OutputFormat::Evt3 => EventFormat::Evt3,
+            OutputFormat::Evt2 => EventFormat::Evt2,
+            OutputFormat::Evt21 => EventFormat::Evt21(WordOrder::Legacy),
+        };
+        let header = RawHeader::new(encoding, geometry, &[("converted_from", source)]);
+        Ok(Sink::Raw(RawWriter::new(out, &header)?))
+    }
+
+    /// Writes a batch; returns how many trigger edges could not be written.
+    fn write(&mut self, batch: &EventBuffer) -> anyhow::Result<u64> {
+        match self {
+            Sink::Csv(out) => {
+                write_events(out, &batch.cd)?;
+                Ok(batch.triggers.len() as u64)
+            }
+            Sink::Raw(w) => {
+                w.write(&batch.cd, &batch.triggers)?;
+                Ok(0)
+            }
+        }
+    }
+
+    fn finish(self) -> anyhow::Result<()> {
+        match self {
+            Sink::Csv(mut out) => out.flush()?,
+            Sink::Raw(w) => {
+                w.finish()?;
+            }
+        }
+        Ok(())
+    }
+}
+
+pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
+    let format = output_format(args)?;
+    let is_csv_input = args.input.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let total = std::fs::metadata(&args.input).with_context(|| format!("{}", args.input.display()))?.len();
+    let bar = super::progress::bytes_bar(total, "converting");
+    let mut batch = EventBuffer::new();
+    let mut dropped_triggers = 0u64;
+    let mut events = 0u64;
+    let out_path = &args.output;
+    let result = if is_csv_input {
+        let geometry = args.geometry.unwrap_or(Geometry::new(1280, 720));
+        let mut sink = Sink::create(out_path, format, geometry, "csv")?;
+        let mut input = File::open(&args.input).with_context(|| format!("{}", args.input.display()))?;
+        let mut parser = EventCsvParser::new();
+        let mut buf = vec![0u8; 1 << 20];
+        let mut bad: Option<String> = None;
+        let mut done = 0u64;
+        loop {
+            let n = input.read(&mut buf).with_context(|| format!("{}: read failed", args.input.display()))?;
+            let mut on_error = |e: drivers::formats::csv::CsvLineError| {
+                bad.get_or_insert_with(|| e.to_string());
+            };
+            if n == 0 {
+                parser.finish(&mut |e| batch.cd.push(e), &mut on_error);
+            } else {
+                parser.feed(&buf[..n], &mut |e| batch.cd.push(e), &mut on_error);
+            }
+            if let Some(msg) = bad.take() {
+                bail!("{}: {msg}", args.input.display());
+            }
+            if let Some(e) = batch.cd.iter().find(|e| e.x >= geometry.width || e.y >= geometry.height) {
+                bail!(
+                    "{}: event at ({}, {}) lies outside the {}x{} sensor; pass --geometry",
+                    args.input.display(),
+                    e.x,
+                    e.y,
+                    geometry.width,
+                    geometry.height
+                );
+            }
+            events += batch.cd.len() as u64;
+            sink.write(&batch).with_context(|| format!("{}", out_path.display()))?;
+            batch.clear();
+            done += n as u64;
+            bar.set_position(done);
+            if n == 0 {
+                break;
+            }
+        }
+        sink.finish().map(|()| None)
+    } else {
+        let mut reader = RawReader::open(&args.input)?;
+        let geometry = reader.header().geometry.or(args.geometry).unwrap_or(Geometry::new(1280, 720));
+        let source = reader.header().format.format_name();
+        let mut sink = Sink::create(out_path, format, geometry, source)?;
+        while reader.read_chunk(&mut batch)? {
+            events += batch.cd.len() as u64;
+            dropped_triggers += sink.write(&batch).with_context(|| format!("{}", out_path.display()))?;
+            batch.clear();
+            bar.set_position(reader.bytes_read());
+        }
+        sink.finish().map(|()| Some(*reader.anomalies()))
+    };
+    bar.finish_and_clear();
+    let anomalies = result?;
+    eprintln!("wrote {events} CD events to {}", out_path.display());
+    if dropped_triggers > 0 {
+        eprintln!("warning: {dropped_triggers} trigger edges dropped: CSV has no trigger records");
+    }
+    if let Some(a) = anomalies
+        && a.total() + a.skipped_before_sync > 0
+    {
+        eprintln!(
+            "warning: input had {} anomalous words and {} words before synchronisation (skipped; see `eventtrack6d \
+             inspect`)",
+            a.total(),
+            a.skipped_before_sync
+        );
+    }
+    Ok(())
+}
