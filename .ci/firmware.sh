@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Install what the trigger firmware needs and cross-build it (DESIGN section 8, issue 7).
+#
+# - qemu-system-arm 10 from Debian bookworm-backports (bookworm's 7.2 cannot be installed beside the
+#   machine's qemu-utils 10, and it loses SysTick interrupts when the core sleeps in WFI);
+# - the rustup target thumbv7em-none-eabihf;
+# - cross-builds of the board binary (Nucleo-F401RE) and the QEMU variant (mps2-an386).
+#
+# Idempotent and non-interactive: a second run installs nothing and only rebuilds (a no-op when
+# nothing changed). Runs as root (CI does); uses sudo only when it is not root and sudo exists.
+set -euo pipefail
+
+repo_root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+target=thumbv7em-none-eabihf
+# Same directory the QEMU test in firmware-trigger/tests/ builds into, so CI compiles once.
+fw_target_dir="${repo_root}/target/firmware"
+
+as_root() {
+    if [ "$(id -u)" -eq 0 ]; then
+        "$@"
+    elif command -v sudo >/dev/null 2>&1; then
+        sudo "$@"
+    else
+        echo "firmware.sh: need root to run: $*" >&2
+        return 1
+    fi
+}
+
+qemu_major() {
+    # Prints the major version of qemu-system-arm, or nothing when it is not installed.
+    command -v qemu-system-arm >/dev/null 2>&1 || return 0
+    qemu-system-arm --version | sed -n 's/^QEMU emulator version \([0-9]*\)\..*/\1/p' | head -n 1
+}
+
+major="$(qemu_major)"
+if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
+    echo "firmware.sh: installing qemu-system-arm from bookworm-backports (found: ${major:-none})"
+    list=/etc/apt/sources.list.d/bookworm-backports.sources
+    if ! grep -rqs 'bookworm-backports' /etc/apt/sources.list.d/ /etc/apt/sources.list 2>/dev/null; then
+        # Same mirror and keyring as the existing bookworm entry.
+        uri="$(awk '/^URIs:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources 2>/dev/null || true)"
+        key="$(awk '/^Signed-By:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources 2>/dev/null || true)"
+        uri="${uri:-http://deb.debian.org/debian}"
+        key="${key:-/usr/share/keyrings/debian-archive-keyring.gpg}"
+        printf 'Types: deb\nURIs: %s\nSuites: bookworm-backports\nComponents: main\nSigned-By: %s\n' \
+            "${uri}" "${key}" | as_root tee "${list}" >/dev/null
+    fi
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q
+    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
+        -t bookworm-backports qemu-system-arm
+    major="$(qemu_major)"
+    if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
+        echo "firmware.sh: qemu-system-arm 10 or newer is required, got '${major:-none}'" >&2
+        exit 1
+    fi
+fi
+echo "firmware.sh: $(qemu-system-arm --version | head -n 1)"
+
+if ! rustup target list --installed | grep -qx "${target}"; then
+    echo "firmware.sh: adding rustup target ${target}"
+    rustup target add "${target}"
+fi
+
+cd "${repo_root}/firmware-trigger"
+echo "firmware.sh: cross-building the board binary (Nucleo-F401RE)"
+CARGO_TARGET_DIR="${fw_target_dir}" cargo build --locked --release --target "${target}" \
+    --no-default-features --features board --bin trigger-board
+echo "firmware.sh: cross-building the QEMU variant (mps2-an386)"
+CARGO_TARGET_DIR="${fw_target_dir}" cargo build --locked --release --target "${target}" \
+    --no-default-features --features qemu --bin trigger-qemu
+echo "firmware.sh: done"
