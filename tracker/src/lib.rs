@@ -1,1 +1,5 @@
 //! EventTrack6D tracker library.
+
+pub mod geometry;
+pub mod mesh;
+pub mod render;

@@ -1,0 +1,123 @@
+//! Meshes converted once, at registration, into the layout the CPU rasteriser wants (f32 `glam` vectors, luminance
+//! textures).
+
+use crate::mesh::texture::wrap_unit;
+use crate::mesh::{Mesh, Texture};
+use glam::{Vec2, Vec3A};
+use std::sync::Arc;
+
+/// Rec. 709 luminance of a linear RGB colour.
+pub(super) fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// A single-channel (luminance) texture with wrap-around bilinear sampling; same addressing as [`Texture`].
+#[derive(Debug)]
+pub(super) struct LumTexture {
+    width: usize,
+    height: usize,
+    texels: Vec<f32>,
+}
+
+impl LumTexture {
+    /// Luminance of `texture` modulated by the material's diffuse colour.
+    fn new(texture: &Texture, diffuse: [f32; 3]) -> Self {
+        let texels = texture
+            .texels()
+            .iter()
+            .map(|t| luminance([t[0] * diffuse[0], t[1] * diffuse[1], t[2] * diffuse[2]]))
+            .collect();
+        Self {
+            width: texture.width() as usize,
+            height: texture.height() as usize,
+            texels,
+        }
+    }
+
+    /// Bilinear sample at OBJ texture coordinates (`v` up), repeating outside `[0, 1)`.
+    #[inline]
+    pub(super) fn sample(&self, uv: Vec2) -> f32 {
+        let x = wrap_unit(uv.x) * self.width as f32 - 0.5;
+        let y = (1.0 - wrap_unit(uv.y)) * self.height as f32 - 0.5;
+        let (x0f, y0f) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0f, y - y0f);
+        let wrap = |i: f32, n: usize| (i as i64).rem_euclid(n as i64) as usize;
+        let (x0, x1) = (wrap(x0f, self.width), wrap(x0f + 1.0, self.width));
+        let (y0, y1) = (wrap(y0f, self.height), wrap(y0f + 1.0, self.height));
+        let row0 = y0 * self.width;
+        let row1 = y1 * self.width;
+        let top = self.texels[row0 + x0] + (self.texels[row0 + x1] - self.texels[row0 + x0]) * fx;
+        let bottom =
+            self.texels[row1 + x0] + (self.texels[row1 + x1] - self.texels[row1 + x0]) * fx;
+        top + (bottom - top) * fy
+    }
+}
+
+/// How a material's albedo (luminance) is obtained.
+#[derive(Debug)]
+pub(super) enum Albedo {
+    /// A constant.
+    Constant(f32),
+    /// From a texture via the mesh's texture coordinates.
+    Textured(LumTexture),
+}
+
+/// A mesh in rasteriser layout.
+#[derive(Debug)]
+pub(super) struct PreparedMesh {
+    /// Keeps the source mesh alive (and identifies it).
+    pub(super) _mesh: Arc<Mesh>,
+    pub(super) positions: Vec<Vec3A>,
+    /// Unit vertex normals, or empty for flat shading.
+    pub(super) normals: Vec<Vec3A>,
+    /// Texture coordinates, or empty.
+    pub(super) uvs: Vec<Vec2>,
+    pub(super) triangles: Vec<[u32; 3]>,
+    /// Unit face normals (zero for degenerate triangles), object frame.
+    pub(super) face_normals: Vec<Vec3A>,
+    pub(super) triangle_materials: Vec<u32>,
+    pub(super) albedo: Vec<Albedo>,
+}
+
+impl PreparedMesh {
+    pub(super) fn new(mesh: Arc<Mesh>) -> Self {
+        let positions: Vec<Vec3A> = mesh
+            .positions()
+            .iter()
+            .map(|p| Vec3A::new(p.x, p.y, p.z))
+            .collect();
+        let normals = mesh.normals().map_or_else(Vec::new, |n| {
+            n.iter().map(|v| Vec3A::new(v.x, v.y, v.z)).collect()
+        });
+        let uvs: Vec<Vec2> = mesh.uvs().map_or_else(Vec::new, |t| {
+            t.iter().map(|t| Vec2::new(t[0], t[1])).collect()
+        });
+        let triangles = mesh.triangles().to_vec();
+        let face_normals = triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| positions[i as usize]);
+                (b - a).cross(c - a).normalize_or_zero()
+            })
+            .collect();
+        let albedo = mesh
+            .materials()
+            .iter()
+            .map(|m| match (&m.texture, uvs.is_empty()) {
+                (Some(t), false) => Albedo::Textured(LumTexture::new(t, m.diffuse)),
+                _ => Albedo::Constant(luminance(m.diffuse)),
+            })
+            .collect();
+        let triangle_materials = mesh.triangle_materials().to_vec();
+        Self {
+            _mesh: mesh,
+            positions,
+            normals,
+            uvs,
+            triangles,
+            face_normals,
+            triangle_materials,
+            albedo,
+        }
+    }
+}

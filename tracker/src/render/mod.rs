@@ -1,0 +1,91 @@
+//! Rendering of posed meshes into depth, normals, object mask and shaded intensity, for a full image or a region of
+//! interest with any pinhole intrinsics.
+//!
+//! [`Renderer`] is the interface; [`CpuRenderer`] the deterministic CPU rasteriser. A GPU backend implements the same
+//! trait: meshes are registered once (uploaded) and referred to by [`MeshId`]; every render writes into a caller-owned
+//! [`RenderTarget`] whose buffers are reused, so rendering per tick does not allocate in steady state.
+//!
+//! Rendering a region of interest is rendering with the ROI's intrinsics ([`PinholeCamera::crop`]);
+//! [`Renderer::render_roi`] does exactly that.
+
+mod cpu;
+mod scene;
+mod target;
+
+pub use cpu::CpuRenderer;
+pub use scene::{BackgroundMesh, Lighting, MASK_BACKGROUND, MASK_EMPTY, Scene, SceneObject};
+pub use target::RenderTarget;
+
+use crate::geometry::{CameraError, PinholeCamera, Roi};
+use crate::mesh::Mesh;
+use std::sync::Arc;
+
+/// Handle of a mesh registered with a particular renderer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct MeshId(pub(crate) u32);
+
+/// The largest image a renderer accepts, in pixels (guards against absurd intrinsics allocating gigabytes).
+pub const MAX_PIXELS: u64 = 1 << 26;
+
+/// Why a render was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RenderError {
+    /// The scene refers to a mesh this renderer does not know.
+    #[error("unknown mesh handle {0:?} (not registered with this renderer)")]
+    UnknownMesh(MeshId),
+    /// An object id is reserved (0 = empty, 65535 = background).
+    #[error("object id {0} is reserved: use 1..=65534")]
+    ReservedObjectId(u16),
+    /// A pose is not finite.
+    #[error("pose of {what} is not finite")]
+    NonFinitePose {
+        /// Which instance (e.g. `object 3`, `background 0`).
+        what: String,
+    },
+    /// The camera intrinsics are invalid.
+    #[error(transparent)]
+    Camera(#[from] CameraError),
+    /// The image is larger than [`MAX_PIXELS`].
+    #[error("image {width}x{height} exceeds the renderer's limit of {MAX_PIXELS} pixels")]
+    ImageTooLarge {
+        /// Width, pixels.
+        width: u32,
+        /// Height, pixels.
+        height: u32,
+    },
+    /// More instances than the renderer can label.
+    #[error("scene has {0} instances; at most 65535 are supported")]
+    TooManyInstances(usize),
+    /// The near clipping distance is not finite and positive.
+    #[error("near clipping distance {0} must be finite and > 0")]
+    InvalidNear(f64),
+    /// A backend-specific failure (e.g. a GPU device error).
+    #[error("renderer backend failed: {0}")]
+    Backend(String),
+}
+
+/// A renderer of posed triangle meshes. Object-safe: the tracker may hold a `Box<dyn Renderer>`.
+pub trait Renderer {
+    /// Registers a mesh (for a GPU backend: uploads it) and returns its handle for this renderer.
+    fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError>;
+
+    /// Renders `scene` as seen by `camera` into `target` (resized to the camera's image size). The output is a pure
+    /// function of the scene, the camera and the registered meshes.
+    fn render(
+        &mut self,
+        scene: &Scene<'_>,
+        camera: &PinholeCamera,
+        target: &mut RenderTarget,
+    ) -> Result<(), RenderError>;
+
+    /// Renders the region of interest `roi` of `camera`'s image at the ROI's output resolution.
+    fn render_roi(
+        &mut self,
+        scene: &Scene<'_>,
+        camera: &PinholeCamera,
+        roi: &Roi,
+        target: &mut RenderTarget,
+    ) -> Result<(), RenderError> {
+        self.render(scene, &camera.crop(roi), target)
+    }
+}

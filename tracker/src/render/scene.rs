@@ -1,0 +1,87 @@
+//! What to render: posed object instances, static background meshes and the lighting.
+
+use super::MeshId;
+use nalgebra::{Isometry3, Vector3};
+
+/// Mask value of pixels where nothing was rendered.
+pub const MASK_EMPTY: u16 = 0;
+/// Mask value of pixels covered by a static background mesh.
+pub const MASK_BACKGROUND: u16 = u16::MAX;
+
+/// One tracked object to render: a registered mesh at a pose, labelled `id` in the mask.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneObject {
+    /// The mesh, as registered with the renderer.
+    pub mesh: MeshId,
+    /// `T_cam_obj`: maps object-frame points (metres) into the camera frame.
+    pub pose: Isometry3<f64>,
+    /// Mask label, in `1..=65534` (0 is empty, 65535 is background).
+    pub id: u16,
+}
+
+/// A static background mesh (table, wall, clutter): rendered and shaded like an object, labelled
+/// [`MASK_BACKGROUND`] in the mask.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BackgroundMesh {
+    /// The mesh, as registered with the renderer.
+    pub mesh: MeshId,
+    /// `T_cam_mesh`, metres.
+    pub pose: Isometry3<f64>,
+}
+
+/// Lambertian + ambient lighting: `intensity = albedo * (ambient + diffuse * max(0, n . l))`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Lighting {
+    /// Unit direction from the surface towards a distant light, camera frame (x right, y down, z forward).
+    pub direction: Vector3<f64>,
+    /// Ambient term, unitless, `>= 0`.
+    pub ambient: f64,
+    /// Diffuse (directional) term, unitless, `>= 0`.
+    pub diffuse: f64,
+}
+
+impl Default for Lighting {
+    /// A light slightly above the camera, shining along the optical axis.
+    fn default() -> Self {
+        Self {
+            direction: Vector3::new(0.0, -0.3, -1.0).normalize(),
+            ambient: 0.3,
+            diffuse: 0.7,
+        }
+    }
+}
+
+/// A scene: object instances, static background meshes, lighting and the near clipping distance.
+///
+/// Borrowed slices so the tracker can build a scene per tick without allocating.
+#[derive(Debug, Clone, Copy)]
+pub struct Scene<'a> {
+    /// Tracked objects.
+    pub objects: &'a [SceneObject],
+    /// Static background meshes.
+    pub background: &'a [BackgroundMesh],
+    /// Lighting.
+    pub lighting: Lighting,
+    /// Near clipping distance along z, metres (> 0); surfaces closer than this are cut away.
+    pub near: f64,
+}
+
+impl<'a> Scene<'a> {
+    /// Default near clipping distance, metres.
+    pub const DEFAULT_NEAR: f64 = 0.01;
+
+    /// A scene of objects only, with default lighting and near plane.
+    pub fn objects(objects: &'a [SceneObject]) -> Self {
+        Self {
+            objects,
+            background: &[],
+            lighting: Lighting::default(),
+            near: Self::DEFAULT_NEAR,
+        }
+    }
+
+    /// The same scene with static background meshes.
+    pub fn with_background(self, background: &'a [BackgroundMesh]) -> Self {
+        Self { background, ..self }
+    }
+}
