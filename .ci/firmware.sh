@@ -56,16 +56,18 @@ if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
 fi
 echo "firmware.sh: $(qemu-system-arm --version | head -n 1)"
 
-if ! rustup target list --installed | grep -qx "${target}"; then
+# Read the list first: grep -q closing the pipe early would fail the pipeline under pipefail.
+installed_targets="$(rustup target list --installed)"
+if ! grep -qx "${target}" <<<"${installed_targets}"; then
     echo "firmware.sh: adding rustup target ${target}"
     rustup target add "${target}"
 fi
 
 cd "${repo_root}/firmware-trigger"
 echo "firmware.sh: cross-building the board binary (Nucleo-F401RE)"
-CARGO_TARGET_DIR="${fw_target_dir}" cargo build --locked --release --target "${target}" \
+CARGO_TARGET_DIR="${fw_target_dir}" cargo build --release --target "${target}" \
     --no-default-features --features board --bin trigger-board
 echo "firmware.sh: cross-building the QEMU variant (mps2-an386)"
-CARGO_TARGET_DIR="${fw_target_dir}" cargo build --locked --release --target "${target}" \
+CARGO_TARGET_DIR="${fw_target_dir}" cargo build --release --target "${target}" \
     --no-default-features --features qemu --bin trigger-qemu
 echo "firmware.sh: done"

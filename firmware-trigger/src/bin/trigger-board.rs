@@ -181,7 +181,11 @@ mod firmware {
         if cmd == Command::Stop {
             // Let the pulses in progress end first so no camera sees a cut-short pulse. Done
             // outside the critical section: the UART and TIM3 interrupts keep running.
-            wait_outputs_low(dp);
+            let plan =
+                critical_section::with(|cs| TRAIN.borrow_ref(cs).as_ref().map(|t| *t.plan()));
+            if let Some(plan) = plan {
+                wait_outputs_low(dp, &plan);
+            }
         }
         critical_section::with(|cs| {
             let mut guard = TRAIN.borrow_ref_mut(cs);
@@ -376,17 +380,19 @@ mod firmware {
         dp.GPIOA.bsrr().write(|w| w.br5().set_bit());
     }
 
-    /// Waits (bounded) until both counters are past their compare values, i.e. both outputs are
-    /// low with most of a period to go.
-    fn wait_outputs_low(dp: &pac::Peripherals) {
-        let low = || {
+    /// Waits (bounded) until both outputs are low and the next rising edge is far off: the
+    /// depth counter past its pulse, and the event counter past the widest event pulse but in
+    /// the first half of what remains of its period.
+    fn wait_outputs_low(dp: &pac::Peripherals, plan: &TimerPlan) {
+        let coded = u32::from(plan.event_coded_width_ticks());
+        let window_end = coded + (plan.event_period_ticks() - coded) / 2;
+        let quiet = || {
             let t2 = dp.TIM2.cnt().read().cnt().bits();
-            let t3 = dp.TIM3.cnt().read().cnt().bits();
-            t2 >= dp.TIM2.ccr1().read().ccr().bits()
-                && u32::from(t3) >= u32::from(dp.TIM3.ccr1().read().ccr().bits())
+            let t3 = u32::from(dp.TIM3.cnt().read().cnt().bits());
+            t2 >= plan.depth_width_ticks() && (coded..window_end).contains(&t3)
         };
-        if dp.TIM2.cr1().read().cen().bit_is_set() && !spin_until(low) {
-            defmt::warn!("stop: outputs did not go low in time, forcing");
+        if dp.TIM2.cr1().read().cen().bit_is_set() && !spin_until(quiet) {
+            defmt::warn!("stop: no quiet window found in time, forcing outputs low");
         }
     }
 
