@@ -15,6 +15,7 @@
 //! The binaries (`trigger-board` for the Nucleo-F401RE, `trigger-qemu` for QEMU's mps2-an386)
 //! are cross-built with the `board` / `qemu` features; see `docs/firmware-trigger.md`.
 #![no_std]
+#![warn(missing_docs)]
 
 pub mod command;
 pub mod edges;
