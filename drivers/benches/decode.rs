@@ -33,7 +33,12 @@ fn dense_events() -> Vec<CdEvent> {
                 s ^= s >> 7;
                 s ^= s << 17;
                 if s & 1 == 1 {
-                    events.push(CdEvent { t_us: t, x, y, polarity: sweep % 2 == 0 });
+                    events.push(CdEvent {
+                        t_us: t,
+                        x,
+                        y,
+                        polarity: sweep % 2 == 0,
+                    });
                 }
             }
         }
@@ -43,7 +48,9 @@ fn dense_events() -> Vec<CdEvent> {
 
 fn encode(format: EventFormat, events: &[CdEvent]) -> Vec<u8> {
     let mut out = Vec::new();
-    AnyEncoder::new(format).encode(events, &[], &mut out).expect("synthetic events are encodable");
+    AnyEncoder::new(format)
+        .encode(events, &[], &mut out)
+        .expect("synthetic events are encodable");
     out
 }
 
@@ -84,11 +91,23 @@ fn benches(c: &mut Criterion) {
     if let Some(bytes) = real_sample() {
         bench_stream(c, "evt3_real_gen41_sample", EventFormat::Evt3, &bytes);
     } else {
-        eprintln!("skipping the real-sample benchmark: ../shared/data/samples/evk3_gen41_evt3.raw not found");
+        eprintln!(
+            "skipping the real-sample benchmark: ../shared/data/samples/evk3_gen41_evt3.raw not found"
+        );
     }
     let dense = dense_events();
-    bench_stream(c, "evt3_dense_1280x720", EventFormat::Evt3, &encode(EventFormat::Evt3, &dense));
-    bench_stream(c, "evt2_dense_1280x720", EventFormat::Evt2, &encode(EventFormat::Evt2, &dense));
+    bench_stream(
+        c,
+        "evt3_dense_1280x720",
+        EventFormat::Evt3,
+        &encode(EventFormat::Evt3, &dense),
+    );
+    bench_stream(
+        c,
+        "evt2_dense_1280x720",
+        EventFormat::Evt2,
+        &encode(EventFormat::Evt2, &dense),
+    );
     let legacy = EventFormat::Evt21(WordOrder::Legacy);
     bench_stream(c, "evt21_dense_1280x720", legacy, &encode(legacy, &dense));
 }

@@ -227,7 +227,7 @@ fn parse_geometry(key: &str, v: &str) -> Result<Geometry, HeaderError> {
         .trim()
         .parse()
         .map_err(|_| bad("height is not an integer"))?;
-    check_size(w, h).map_err(|p| bad(p))
+    check_size(w, h).map_err(bad)
 }
 
 fn check_size(w: u16, h: u16) -> Result<Geometry, &'static str> {
