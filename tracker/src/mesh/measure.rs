@@ -66,45 +66,43 @@ pub(crate) fn total_area(positions: &[Point3<f32>], triangles: &[[u32; 3]]) -> f
         .sum()
 }
 
-/// Largest distance between two points, metres: exact, with pruning so that it is fast on large meshes.
+/// Largest distance between two points, metres: exact, by branch and bound so that it is fast on large meshes.
 ///
-/// A double sweep gives a lower bound `l`; with `c` the box centre and `r` the largest distance from `c`, a pair can only
-/// beat `l` if both points lie at least `l - r` from `c`, so only those candidates are compared pairwise.
+/// With `c` the bounding-box centre, `|p - q| <= |p - c| + |q - c|`; points are visited in decreasing distance from
+/// `c`, and a pair (or every later pair) is skipped as soon as that bound cannot beat the best distance found so far.
 pub(crate) fn diameter(points: &[Point3<f32>]) -> f64 {
-    if points.len() < 2 {
-        return 0.0;
-    }
-    let pts: Vec<Point3<f64>> = points.iter().map(|p| p.cast::<f64>()).collect();
-    let farthest = |from: &Point3<f64>| {
-        pts.iter()
-            .map(|p| (p, (p - from).norm()))
-            .fold(
-                (pts[0], 0.0),
-                |best, (p, d)| if d > best.1 { (*p, d) } else { best },
-            )
-    };
-    let (a, _) = farthest(&pts[0]);
-    let (b, d_ab) = farthest(&a);
-    let (_, d_b) = farthest(&b);
-    let mut best = d_ab.max(d_b);
     let c = Aabb::of_points(points).center();
-    let r = pts.iter().map(|p| (p - c).norm()).fold(0.0, f64::max);
-    let cut = best - r;
-    let candidates: Vec<Point3<f64>> = pts
+    let mut pts: Vec<([f64; 3], f64)> = points
         .iter()
-        .filter(|p| (*p - c).norm() >= cut)
-        .copied()
+        .map(|p| {
+            let q = [f64::from(p.x), f64::from(p.y), f64::from(p.z)];
+            let r = ((q[0] - c.x).powi(2) + (q[1] - c.y).powi(2) + (q[2] - c.z).powi(2)).sqrt();
+            (q, r)
+        })
         .collect();
-    let mut best_sq = best * best;
-    for (i, p) in candidates.iter().enumerate() {
-        for q in &candidates[i + 1..] {
-            let d = (p - q).norm_squared();
+    pts.sort_by(|a, b| {
+        b.1.total_cmp(&a.1)
+            .then(a.0[0].total_cmp(&b.0[0]))
+            .then(a.0[1].total_cmp(&b.0[1]))
+    });
+    pts.dedup_by(|a, b| a.0 == b.0);
+    let mut best_sq = 0.0f64;
+    let mut best = 0.0f64;
+    for (i, (p, rp)) in pts.iter().enumerate() {
+        if pts.first().is_some_and(|first| rp + first.1 <= best) {
+            break;
+        }
+        for (q, rq) in &pts[i + 1..] {
+            if rp + rq <= best {
+                break;
+            }
+            let d = (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2);
             if d > best_sq {
                 best_sq = d;
+                best = d.sqrt();
             }
         }
     }
-    best = best.max(best_sq.sqrt());
     best
 }
 

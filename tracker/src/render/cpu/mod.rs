@@ -147,39 +147,42 @@ impl CpuRenderer {
             camera.cy as f32,
         );
         let width = self.vis.width;
-        for (idx, &inst) in self.vis.instance.iter().enumerate() {
-            if inst == NO_INSTANCE {
-                continue;
-            }
-            let info = &self.instances[usize::from(inst)];
-            let mesh = &self.meshes[info.mesh];
-            let tri = self.vis.triangle[idx] as usize;
-            let [b1, b2] = self.vis.bary[idx];
-            let b0 = 1.0 - b1 - b2;
-            let [i0, i1, i2] = mesh.triangles[tri].map(|i| i as usize);
-            let n_obj = if mesh.normals.is_empty() {
-                mesh.face_normals[tri]
-            } else {
-                mesh.normals[i0] * b0 + mesh.normals[i1] * b1 + mesh.normals[i2] * b2
-            };
-            let (u, v) = ((idx % width) as f32, (idx / width) as f32);
-            let ray = Vec3A::new((u - cx) / fx, (v - cy) / fy, 1.0);
-            let mut n = (info.rotation * n_obj).normalize_or_zero();
-            if n == Vec3A::ZERO {
-                n = -ray.normalize();
-            } else if n.dot(ray) > 0.0 {
-                n = -n;
-            }
-            let albedo = match &mesh.albedo[mesh.triangle_materials[tri] as usize] {
-                Albedo::Constant(a) => *a,
-                Albedo::Textured(texture) => {
-                    texture.sample(mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2)
+        for (v, row) in self.vis.instance.chunks_exact(width.max(1)).enumerate() {
+            let ray_y = (v as f32 - cy) / fy;
+            for (u, &inst) in row.iter().enumerate() {
+                if inst == NO_INSTANCE {
+                    continue;
                 }
-            };
-            target.depth[idx] = self.vis.z[idx];
-            target.normals[idx] = n.to_array();
-            target.mask[idx] = info.mask;
-            target.intensity[idx] = albedo * (ambient + diffuse * n.dot(light).max(0.0));
+                let idx = v * width + u;
+                let info = &self.instances[usize::from(inst)];
+                let mesh = &self.meshes[info.mesh];
+                let tri = self.vis.triangle[idx] as usize;
+                let [b1, b2] = self.vis.bary[idx];
+                let b0 = 1.0 - b1 - b2;
+                let [i0, i1, i2] = mesh.triangles[tri].map(|i| i as usize);
+                let n_obj = if mesh.normals.is_empty() {
+                    mesh.face_normals[tri]
+                } else {
+                    mesh.normals[i0] * b0 + mesh.normals[i1] * b1 + mesh.normals[i2] * b2
+                };
+                let ray = Vec3A::new((u as f32 - cx) / fx, ray_y, 1.0);
+                let mut n = (info.rotation * n_obj).normalize_or_zero();
+                if n == Vec3A::ZERO {
+                    n = -ray.normalize();
+                } else if n.dot(ray) > 0.0 {
+                    n = -n;
+                }
+                let albedo = match &mesh.albedo[mesh.triangle_materials[tri] as usize] {
+                    Albedo::Constant(a) => *a,
+                    Albedo::Textured(texture) => {
+                        texture.sample(mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2)
+                    }
+                };
+                target.depth[idx] = 1.0 / self.vis.inv_z[idx];
+                target.normals[idx] = n.to_array();
+                target.mask[idx] = info.mask;
+                target.intensity[idx] = albedo * (ambient + diffuse * n.dot(light).max(0.0));
+            }
         }
     }
 }

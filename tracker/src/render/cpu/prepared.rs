@@ -41,9 +41,19 @@ impl LumTexture {
         let y = (1.0 - wrap_unit(uv.y)) * self.height as f32 - 0.5;
         let (x0f, y0f) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0f, y - y0f);
-        let wrap = |i: f32, n: usize| (i as i64).rem_euclid(n as i64) as usize;
-        let (x0, x1) = (wrap(x0f, self.width), wrap(x0f + 1.0, self.width));
-        let (y0, y1) = (wrap(y0f, self.height), wrap(y0f + 1.0, self.height));
+        // Coordinates are in [-0.5, n - 0.5), so the lower neighbour is in [-1, n - 1]: wrap with two compares.
+        let wrap = |i: f32, n: usize| -> (usize, usize) {
+            let i = i as i64;
+            let lo = if i < 0 {
+                n - 1
+            } else {
+                (i as usize).min(n - 1)
+            };
+            let hi = if lo + 1 >= n { 0 } else { lo + 1 };
+            (lo, hi)
+        };
+        let (x0, x1) = wrap(x0f, self.width);
+        let (y0, y1) = wrap(y0f, self.height);
         let row0 = y0 * self.width;
         let row1 = y1 * self.width;
         let top = self.texels[row0 + x0] + (self.texels[row0 + x1] - self.texels[row0 + x0]) * fx;

@@ -20,8 +20,8 @@ pub(super) const NO_INSTANCE: u16 = u16::MAX;
 pub(super) struct VisBuffer {
     pub(super) width: usize,
     pub(super) height: usize,
-    /// Depth along z, metres; `INFINITY` where empty.
-    pub(super) z: Vec<f32>,
+    /// Inverse depth `1 / z`, 1/metres; 0 where empty.
+    pub(super) inv_z: Vec<f32>,
     /// Instance index, or [`NO_INSTANCE`].
     pub(super) instance: Vec<u16>,
     /// Triangle index within the instance's mesh.
@@ -36,8 +36,8 @@ impl VisBuffer {
         let n = width * height;
         self.width = width;
         self.height = height;
-        self.z.clear();
-        self.z.resize(n, f32::INFINITY);
+        self.inv_z.clear();
+        self.inv_z.resize(n, 0.0);
         self.instance.clear();
         self.instance.resize(n, NO_INSTANCE);
         self.triangle.clear();
@@ -244,29 +244,43 @@ fn rasterise(vis: &mut VisBuffer, instance: u16, triangle: u32, mut v: [RasterVe
         step_y[k] = (v[b].x - v[a].x) * SUBPIXEL;
         bias[k] = fill_bias(&v[a], &v[b]);
     }
-    let inv_area = 1.0 / area as f32;
-    let iz = [v[0].iz, v[1].iz, v[2].iz];
-    // Barycentric tags pre-multiplied by inverse depth, for perspective-correct interpolation.
-    let c = [v[0].b * v[0].iz, v[1].b * v[1].iz, v[2].b * v[2].iz];
+    // Inverse depth and the perspective-weighted barycentric tags are affine in the pixel position: evaluate them as
+    // planes `value = v0 + vx * dx + vy * dy` relative to the box's first pixel centre (f64 setup, f32 per pixel).
+    let inv_area = 1.0 / area as f64;
+    let plane = |attr: [f64; 3]| -> [f32; 3] {
+        let mut out = [0.0f64; 3];
+        for k in 0..3 {
+            out[0] += attr[k] * row[k] as f64 * inv_area;
+            out[1] += attr[k] * step_x[k] as f64 * inv_area;
+            out[2] += attr[k] * step_y[k] as f64 * inv_area;
+        }
+        out.map(|v| v as f32)
+    };
+    let iz = [v[0].iz, v[1].iz, v[2].iz].map(f64::from);
+    let inv_z = plane(iz);
+    let tag1 = plane([0, 1, 2].map(|k| iz[k] * f64::from(v[k].b.y)));
+    let tag2 = plane([0, 1, 2].map(|k| iz[k] * f64::from(v[k].b.z)));
     for y in y0..=y1 {
+        let dy = (y - y0) as f32;
+        let (iz_row, b1_row, b2_row) = (
+            inv_z[0] + inv_z[2] * dy,
+            tag1[0] + tag1[2] * dy,
+            tag2[0] + tag2[2] * dy,
+        );
         let mut e = row;
         let base = y as usize * vis.width;
         for x in x0..=x1 {
             if (e[0] + bias[0]) | (e[1] + bias[1]) | (e[2] + bias[2]) >= 0 {
-                let l = [
-                    e[0] as f32 * inv_area,
-                    e[1] as f32 * inv_area,
-                    e[2] as f32 * inv_area,
-                ];
-                let inv_z = l[0] * iz[0] + l[1] * iz[1] + l[2] * iz[2];
-                let z = 1.0 / inv_z;
+                let dx = (x - x0) as f32;
+                let w = iz_row + inv_z[1] * dx;
                 let idx = base + x as usize;
-                if z < vis.z[idx] {
-                    let b = (c[0] * l[0] + c[1] * l[1] + c[2] * l[2]) * z;
-                    vis.z[idx] = z;
+                // Larger inverse depth = nearer; ties keep the first drawn fragment (deterministic order).
+                if w > vis.inv_z[idx] {
+                    let z = 1.0 / w;
+                    vis.inv_z[idx] = w;
                     vis.instance[idx] = instance;
                     vis.triangle[idx] = triangle;
-                    vis.bary[idx] = [b.y, b.z];
+                    vis.bary[idx] = [(b1_row + tag1[1] * dx) * z, (b2_row + tag2[1] * dx) * z];
                 }
             }
             for k in 0..3 {
