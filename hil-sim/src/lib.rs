@@ -1,4 +1,10 @@
-//! Hardware-in-the-loop simulator for EventTrack6D.
-pub mod pattern;
+//! Hardware-in-the-loop simulator for EventTrack6D: synthetic scenes with the procedural object library,
+//! motion after the paper's test sequences, ESIM event simulation driven by the renderer, a RealSense-like
+//! depth sensor, and recordings in the format of `docs/recording-format.md`.
 
+pub mod depth_sensor;
+pub mod esim;
+pub mod motion;
 pub mod objects;
+pub mod pattern;
+pub mod rng;
