@@ -141,6 +141,8 @@ proptest! {
         let cam = vga();
         let pts: Vec<Point2<f64>> = mesh.positions().iter()
             .map(|p| cam.project(&(pose * p.cast::<f64>())).unwrap()).collect();
+        // The whole silhouette must be inside the image for the pixel count to measure it.
+        prop_assume!(pts.iter().all(|p| cam.contains(p)));
         let (area, perimeter) = hull_area(pts);
         let (mut r, ids) = renderer_with(vec![mesh]);
         let objects = [SceneObject { mesh: ids[0], pose, id: 3 }];
@@ -581,4 +583,43 @@ fn invalid_scenes_are_refused() {
     // The trait is object-safe.
     let boxed: &mut dyn Renderer = &mut r;
     assert!(boxed.render(&Scene::objects(&[]), &cam, &mut t).is_ok());
+}
+
+#[test]
+fn back_face_culling_does_not_change_the_image() {
+    // Closed meshes are culled when drawn as objects, never as background: both renders must agree.
+    let (mut r, ids) = renderer_with(vec![sphere(0.08, 16, 32), cube(0.1)]);
+    let cam = vga();
+    for (mesh, pose) in [
+        (ids[0], at(0.01, 0.02, 0.4)),
+        (
+            ids[1],
+            Isometry3::from_parts(
+                Translation3::new(0.0, 0.0, 0.3),
+                UnitQuaternion::from_euler_angles(0.4, 0.7, 0.2),
+            ),
+        ),
+    ] {
+        let objects = [SceneObject { mesh, pose, id: 4 }];
+        let background = [BackgroundMesh { mesh, pose }];
+        let (mut culled, mut full) = (RenderTarget::new(), RenderTarget::new());
+        r.render(&Scene::objects(&objects), &cam, &mut culled)
+            .unwrap();
+        r.render(
+            &Scene::objects(&[]).with_background(&background),
+            &cam,
+            &mut full,
+        )
+        .unwrap();
+        assert_eq!(culled.depth(), full.depth());
+        assert_eq!(culled.normals(), full.normals());
+        assert_eq!(culled.intensity(), full.intensity());
+        assert!(
+            culled
+                .mask()
+                .iter()
+                .zip(full.mask())
+                .all(|(a, b)| (*a == 4) == (*b == MASK_BACKGROUND))
+        );
+    }
 }

@@ -8,9 +8,10 @@
 //! [`tracker::mesh::load_obj`] reads back.
 
 mod builder;
-mod containers;
+mod packaging;
 mod preview;
-mod texture;
+pub(crate) mod tableware;
+pub mod texture;
 mod tools;
 mod write;
 
@@ -138,15 +139,15 @@ pub fn generate(kind: ObjectKind, seed: u64) -> ProceduralObject {
     let seed = seed ^ (kind as u64 + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15);
     let (mut geometry, texture, symmetries) = match kind {
         ObjectKind::CrackerBox => {
-            let (g, t) = containers::cardboard_box(Vector3::new(0.16, 0.06, 0.21), seed);
+            let (g, t) = packaging::cardboard_box(Vector3::new(0.16, 0.06, 0.21), seed);
             (g, t, box_symmetries())
         }
         ObjectKind::PuddingBox => {
-            let (g, t) = containers::cardboard_box(Vector3::new(0.09, 0.035, 0.11), seed);
+            let (g, t) = packaging::cardboard_box(Vector3::new(0.09, 0.035, 0.11), seed);
             (g, t, box_symmetries())
         }
         ObjectKind::Can => {
-            let (g, t) = containers::can(seed);
+            let (g, t) = packaging::can(seed);
             (
                 g,
                 t,
@@ -154,23 +155,23 @@ pub fn generate(kind: ObjectKind, seed: u64) -> ProceduralObject {
             )
         }
         ObjectKind::Bottle => {
-            let (g, t) = containers::bottle(seed);
+            let (g, t) = packaging::bottle(seed);
             (g, t, vec![axial_symmetry()])
         }
         ObjectKind::Mug => {
-            let (g, t) = containers::mug(seed);
+            let (g, t) = tableware::mug(seed);
             (g, t, vec![])
         }
         ObjectKind::Bowl => {
-            let (g, t) = containers::bowl(seed);
+            let (g, t) = tableware::bowl(seed);
             (g, t, vec![axial_symmetry()])
         }
         ObjectKind::Marker => {
-            let (g, t) = containers::marker(seed);
+            let (g, t) = tableware::marker(seed);
             (g, t, vec![axial_symmetry()])
         }
         ObjectKind::WineGlass => {
-            let (g, t) = containers::wine_glass(seed);
+            let (g, t) = tableware::wine_glass(seed);
             (g, t, vec![axial_symmetry()])
         }
         ObjectKind::Banana => {

@@ -13,8 +13,12 @@ pub fn srgb_to_linear(c: u8) -> f32 {
 /// Maps a texture coordinate into `[0, 1)` (repeat addressing); non-finite coordinates map to 0.
 #[inline]
 pub fn wrap_unit(t: f32) -> f32 {
-    let w = t - t.floor();
-    if w.is_finite() { w } else { 0.0 }
+    // Beyond 2^23 every f32 is an integer (fraction 0); NaN fails the comparison. Truncation avoids a libm call.
+    if t.is_nan() || t.abs() >= 8_388_608.0 {
+        return 0.0;
+    }
+    let f = t - (t as i32) as f32;
+    if f < 0.0 { f + 1.0 } else { f }
 }
 
 /// A diffuse texture in linear RGB (`[0, 1]`), row-major, first row = top of the image (`v = 1` in OBJ coordinates).

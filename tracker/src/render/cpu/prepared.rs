@@ -87,6 +87,48 @@ pub(super) struct PreparedMesh {
     pub(super) face_normals: Vec<Vec3A>,
     pub(super) triangle_materials: Vec<u32>,
     pub(super) albedo: Vec<Albedo>,
+    /// Back-face culling for this mesh as an object: `+1` cull triangles with positive screen area, `-1` negative,
+    /// `0` never (the mesh is not a closed, consistently wound surface).
+    pub(super) cull: i8,
+}
+
+/// Decides whether back faces can be culled: only for closed, consistently oriented surfaces (every edge, after
+/// welding identical positions, used exactly once in each direction). Returns the sign of screen-space area to cull
+/// (see [`PreparedMesh::cull`]); outward winding (positive enclosed volume) culls positive area.
+fn back_face_cull_sign(positions: &[Vec3A], triangles: &[[u32; 3]]) -> i8 {
+    use std::collections::HashMap;
+    let mut weld: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
+    let ids: Vec<u32> = positions
+        .iter()
+        .map(|p| {
+            let next = weld.len() as u32;
+            *weld.entry(p.to_array().map(f32::to_bits)).or_insert(next)
+        })
+        .collect();
+    let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(triangles.len() * 2);
+    let mut volume = 0.0f64;
+    for t in triangles {
+        let w = t.map(|i| ids[i as usize]);
+        if w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
+            continue; // Collapsed (e.g. at a pole): contributes no surface.
+        }
+        let [a, b, c] = t.map(|i| positions[i as usize].as_dvec3());
+        volume += a.dot(b.cross(c));
+        for (x, y) in [(w[0], w[1]), (w[1], w[2]), (w[2], w[0])] {
+            let entry = edges.entry((x.min(y), x.max(y))).or_insert((0, 0));
+            if x < y {
+                entry.0 += 1;
+            } else {
+                entry.1 += 1;
+            }
+        }
+    }
+    let closed = !edges.is_empty() && edges.values().all(|&(f, b)| f == 1 && b == 1);
+    match (closed, volume) {
+        (true, v) if v > 0.0 => 1,
+        (true, v) if v < 0.0 => -1,
+        _ => 0,
+    }
 }
 
 impl PreparedMesh {
@@ -119,6 +161,7 @@ impl PreparedMesh {
             })
             .collect();
         let triangle_materials = mesh.triangle_materials().to_vec();
+        let cull = back_face_cull_sign(&positions, &triangles);
         Self {
             _mesh: mesh,
             positions,
@@ -128,6 +171,41 @@ impl PreparedMesh {
             face_normals,
             triangle_materials,
             albedo,
+            cull,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetrahedron() -> (Vec<Vec3A>, Vec<[u32; 3]>) {
+        let p = vec![Vec3A::ZERO, Vec3A::X, Vec3A::Y, Vec3A::Z];
+        // Outward (counter-clockwise seen from outside).
+        let t = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        (p, t)
+    }
+
+    #[test]
+    fn closed_outward_mesh_culls_positive_area() {
+        let (p, t) = tetrahedron();
+        assert_eq!(back_face_cull_sign(&p, &t), 1);
+        let inverted: Vec<[u32; 3]> = t.iter().map(|&[a, b, c]| [a, c, b]).collect();
+        assert_eq!(back_face_cull_sign(&p, &inverted), -1);
+    }
+
+    #[test]
+    fn open_or_inconsistent_meshes_are_never_culled() {
+        let (p, mut t) = tetrahedron();
+        let open = t[..3].to_vec();
+        assert_eq!(back_face_cull_sign(&p, &open), 0);
+        t[3] = [1, 3, 2]; // one face flipped
+        assert_eq!(back_face_cull_sign(&p, &t), 0);
+        // Split vertices at identical positions are welded: still closed.
+        let mut p2 = p.clone();
+        p2.push(Vec3A::Z);
+        let t2 = vec![[0, 2, 1], [0, 1, 3], [0, 4, 2], [1, 2, 4]];
+        assert_eq!(back_face_cull_sign(&p2, &t2), 1);
     }
 }

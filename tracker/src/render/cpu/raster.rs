@@ -104,12 +104,18 @@ impl Projector {
         let x = self.fx * p.x * iz + self.cx;
         let y = self.fy * p.y * iz + self.cy;
         RasterVertex {
-            x: (x * SUBPIXEL as f32).round() as i64,
-            y: (y * SUBPIXEL as f32).round() as i64,
+            x: round_to_i64(x * SUBPIXEL as f32),
+            y: round_to_i64(y * SUBPIXEL as f32),
             iz,
             b,
         }
     }
+}
+
+/// Rounds half away from zero with a truncating conversion (no libm call on baseline x86-64); saturates.
+#[inline]
+fn round_to_i64(v: f32) -> i64 {
+    (v + 0.5f32.copysign(v)) as i64
 }
 
 /// A projected vertex: fixed-point pixel-centre coordinates, inverse depth and its barycentric coordinates with respect
@@ -122,7 +128,12 @@ pub(super) struct RasterVertex {
     b: Vec3A,
 }
 
+/// Which triangles to skip by the sign of their screen-space area (back faces of closed meshes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Cull(pub(super) i8);
+
 /// The triangle `v` (camera frame) with per-vertex outcodes; clips if needed and rasterises into `vis`.
+#[allow(clippy::too_many_arguments)] // One call site; the arguments are the triangle's data.
 pub(super) fn draw_triangle(
     vis: &mut VisBuffer,
     proj: &Projector,
@@ -131,6 +142,7 @@ pub(super) fn draw_triangle(
     v: [Vec3A; 3],
     codes: [u8; 3],
     projected: Option<[RasterVertex; 3]>,
+    cull: Cull,
 ) {
     if codes[0] & codes[1] & codes[2] != 0 {
         return; // Entirely outside one plane.
@@ -146,7 +158,7 @@ pub(super) fn draw_triangle(
             }
             None => [0, 1, 2].map(|i| proj.project(v[i], tags[i])),
         };
-        rasterise(vis, instance, triangle, rv);
+        rasterise(vis, instance, triangle, rv, cull);
         return;
     }
     // Sutherland-Hodgman against the planes that some vertex violates; at most 3 + 5 vertices.
@@ -190,7 +202,7 @@ pub(super) fn draw_triangle(
             proj.project(poly[i].0, poly[i].1),
             proj.project(poly[i + 1].0, poly[i + 1].1),
         ];
-        rasterise(vis, instance, triangle, rv);
+        rasterise(vis, instance, triangle, rv, cull);
     }
 }
 
@@ -208,9 +220,15 @@ fn fill_bias(a: &RasterVertex, b: &RasterVertex) -> i64 {
     if dy < 0 || (dy == 0 && dx > 0) { 0 } else { -1 }
 }
 
-fn rasterise(vis: &mut VisBuffer, instance: u16, triangle: u32, mut v: [RasterVertex; 3]) {
+fn rasterise(
+    vis: &mut VisBuffer,
+    instance: u16,
+    triangle: u32,
+    mut v: [RasterVertex; 3],
+    cull: Cull,
+) {
     let mut area = edge(&v[0], &v[1], v[2].x, v[2].y);
-    if area == 0 {
+    if area == 0 || (cull.0 > 0 && area > 0) || (cull.0 < 0 && area < 0) {
         return;
     }
     if area < 0 {
