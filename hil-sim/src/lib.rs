@@ -4,7 +4,11 @@
 
 pub mod depth_sensor;
 pub mod esim;
+pub mod generate;
 pub mod motion;
 pub mod objects;
 pub mod pattern;
+pub mod preview;
+pub mod rig;
 pub mod rng;
+pub mod suite;

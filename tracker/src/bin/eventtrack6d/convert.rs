@@ -44,9 +44,15 @@ pub enum OutputFormat {
 }
 
 fn parse_geometry(s: &str) -> Result<Geometry, String> {
-    let (w, h) = s.split_once('x').ok_or("expected WIDTHxHEIGHT, e.g. 1280x720")?;
-    let w: u16 = w.parse().map_err(|_| format!("width `{w}` is not an integer"))?;
-    let h: u16 = h.parse().map_err(|_| format!("height `{h}` is not an integer"))?;
+    let (w, h) = s
+        .split_once('x')
+        .ok_or("expected WIDTHxHEIGHT, e.g. 1280x720")?;
+    let w: u16 = w
+        .parse()
+        .map_err(|_| format!("width `{w}` is not an integer"))?;
+    let h: u16 = h
+        .parse()
+        .map_err(|_| format!("height `{h}` is not an integer"))?;
     if w == 0 || h == 0 || w > 2048 || h > 2048 {
         return Err("each dimension must be 1..2048".into());
     }
@@ -57,7 +63,12 @@ fn output_format(args: &ConvertArgs) -> anyhow::Result<OutputFormat> {
     if let Some(f) = args.to {
         return Ok(f);
     }
-    let ext = args.output.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = args
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     Ok(match ext.as_str() {
         "csv" => OutputFormat::Csv,
         "evt2" => OutputFormat::Evt2,
@@ -77,8 +88,14 @@ enum Sink {
 }
 
 impl Sink {
-    fn create(path: &Path, format: OutputFormat, geometry: Geometry, source: &str) -> anyhow::Result<Self> {
-        let file = File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
+    fn create(
+        path: &Path,
+        format: OutputFormat,
+        geometry: Geometry,
+        source: &str,
+    ) -> anyhow::Result<Self> {
+        let file =
+            File::create(path).with_context(|| format!("{}: cannot create", path.display()))?;
         let mut out = BufWriter::with_capacity(1 << 20, file);
         let encoding = match format {
             OutputFormat::Csv => {
@@ -120,8 +137,13 @@ impl Sink {
 
 pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     let format = output_format(args)?;
-    let is_csv_input = args.input.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-    let total = std::fs::metadata(&args.input).with_context(|| format!("{}", args.input.display()))?.len();
+    let is_csv_input = args
+        .input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let total = std::fs::metadata(&args.input)
+        .with_context(|| format!("{}", args.input.display()))?
+        .len();
     let bar = super::progress::bytes_bar(total, "converting");
     let mut batch = EventBuffer::new();
     let mut dropped_triggers = 0u64;
@@ -130,13 +152,16 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     let result = if is_csv_input {
         let geometry = args.geometry.unwrap_or(Geometry::new(1280, 720));
         let mut sink = Sink::create(out_path, format, geometry, "csv")?;
-        let mut input = File::open(&args.input).with_context(|| format!("{}", args.input.display()))?;
+        let mut input =
+            File::open(&args.input).with_context(|| format!("{}", args.input.display()))?;
         let mut parser = EventCsvParser::new();
         let mut buf = vec![0u8; 1 << 20];
         let mut bad: Option<String> = None;
         let mut done = 0u64;
         loop {
-            let n = input.read(&mut buf).with_context(|| format!("{}: read failed", args.input.display()))?;
+            let n = input
+                .read(&mut buf)
+                .with_context(|| format!("{}: read failed", args.input.display()))?;
             let mut on_error = |e: drivers::formats::csv::CsvLineError| {
                 bad.get_or_insert_with(|| e.to_string());
             };
@@ -148,7 +173,11 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
             if let Some(msg) = bad.take() {
                 bail!("{}: {msg}", args.input.display());
             }
-            if let Some(e) = batch.cd.iter().find(|e| e.x >= geometry.width || e.y >= geometry.height) {
+            if let Some(e) = batch
+                .cd
+                .iter()
+                .find(|e| e.x >= geometry.width || e.y >= geometry.height)
+            {
                 bail!(
                     "{}: event at ({}, {}) lies outside the {}x{} sensor; pass --geometry",
                     args.input.display(),
@@ -159,7 +188,8 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
                 );
             }
             events += batch.cd.len() as u64;
-            sink.write(&batch).with_context(|| format!("{}", out_path.display()))?;
+            sink.write(&batch)
+                .with_context(|| format!("{}", out_path.display()))?;
             batch.clear();
             done += n as u64;
             bar.set_position(done);
@@ -170,12 +200,18 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         sink.finish().map(|()| None)
     } else {
         let mut reader = RawReader::open(&args.input)?;
-        let geometry = reader.header().geometry.or(args.geometry).unwrap_or(Geometry::new(1280, 720));
+        let geometry = reader
+            .header()
+            .geometry
+            .or(args.geometry)
+            .unwrap_or(Geometry::new(1280, 720));
         let source = reader.header().format.format_name();
         let mut sink = Sink::create(out_path, format, geometry, source)?;
         while reader.read_chunk(&mut batch)? {
             events += batch.cd.len() as u64;
-            dropped_triggers += sink.write(&batch).with_context(|| format!("{}", out_path.display()))?;
+            dropped_triggers += sink
+                .write(&batch)
+                .with_context(|| format!("{}", out_path.display()))?;
             batch.clear();
             bar.set_position(reader.bytes_read());
         }

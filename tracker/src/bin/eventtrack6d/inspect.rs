@@ -22,9 +22,14 @@ pub struct InspectArgs {
 }
 
 pub fn run(args: &InspectArgs) -> anyhow::Result<()> {
-    let total = std::fs::metadata(&args.file).with_context(|| format!("{}", args.file.display()))?.len();
+    let total = std::fs::metadata(&args.file)
+        .with_context(|| format!("{}", args.file.display()))?
+        .len();
     let bar = super::progress::bytes_bar(total, "reading");
-    let config = TimelineConfig { channel: args.trigger_channel, ..TimelineConfig::default() };
+    let config = TimelineConfig {
+        channel: args.trigger_channel,
+        ..TimelineConfig::default()
+    };
     let summary = summarize_raw(&args.file, config, |done, _| bar.set_position(done));
     bar.finish_and_clear();
     let s = summary?;
@@ -45,18 +50,31 @@ fn duration_us(s: &StreamSummary) -> i64 {
 
 fn to_json(s: &StreamSummary) -> serde_json::Value {
     let d = duration_us(s);
-    let rate = if d > 0 { s.counts.cd_events() as f64 / (d as f64 * 1e-6) } else { 0.0 };
-    let triggers: serde_json::Map<String, serde_json::Value> =
-        s.trigger_edges().iter().map(|(ch, (r, f))| (ch.to_string(), json!(r + f))).collect();
+    let rate = if d > 0 {
+        s.counts.cd_events() as f64 / (d as f64 * 1e-6)
+    } else {
+        0.0
+    };
+    let triggers: serde_json::Map<String, serde_json::Value> = s
+        .trigger_edges()
+        .iter()
+        .map(|(ch, (r, f))| (ch.to_string(), json!(r + f)))
+        .collect();
     let triggers_by_edge: serde_json::Map<String, serde_json::Value> = s
         .trigger_edges()
         .iter()
         .map(|(ch, (r, f))| (ch.to_string(), json!({"rising": r, "falling": f})))
         .collect();
-    let anomalies: serde_json::Map<String, serde_json::Value> =
-        s.anomalies.iter().map(|(k, n)| (k.name().to_string(), json!(n))).collect();
-    let header: serde_json::Map<String, serde_json::Value> =
-        s.header.iter().map(|(k, v)| (k.clone(), json!(v))).collect();
+    let anomalies: serde_json::Map<String, serde_json::Value> = s
+        .anomalies
+        .iter()
+        .map(|(k, n)| (k.name().to_string(), json!(n)))
+        .collect();
+    let header: serde_json::Map<String, serde_json::Value> = s
+        .header
+        .iter()
+        .map(|(k, v)| (k.clone(), json!(v)))
+        .collect();
     json!({
         "format": s.format.format_name(),
         "evt": s.format.evt_version(),
@@ -99,7 +117,9 @@ fn print_text(path: &std::path::Path, s: &StreamSummary) {
     println!("format      {} (evt {})", s.format, s.format.evt_version());
     match (s.width, s.height) {
         (Some(w), Some(h)) => println!("geometry    {w}x{h}"),
-        _ => println!("geometry    unknown (no geometry, format size or known plugin_name in the header)"),
+        _ => println!(
+            "geometry    unknown (no geometry, format size or known plugin_name in the header)"
+        ),
     }
     for (k, v) in &s.header {
         println!("header      {k} = {v}");
@@ -109,7 +129,11 @@ fn print_text(path: &std::path::Path, s: &StreamSummary) {
         (Some(a), Some(b)) => println!("time        {a} .. {b} us ({:.3} ms)", d as f64 / 1e3),
         _ => println!("time        no timestamped records"),
     }
-    let rate = if d > 0 { s.counts.cd_events() as f64 / (d as f64 * 1e-6) } else { 0.0 };
+    let rate = if d > 0 {
+        s.counts.cd_events() as f64 / (d as f64 * 1e-6)
+    } else {
+        0.0
+    };
     println!(
         "cd events   {} ({} ON, {} OFF), {:.3} Mev/s",
         s.counts.cd_events(),
@@ -136,7 +160,13 @@ fn print_text(path: &std::path::Path, s: &StreamSummary) {
         println!(
             "            missing {} (bridged), extra {}, jittered {}, phase errors {}, missing phase code {}, \
              unpaired rising {}, unpaired falling {}",
-            c.missing, c.extra, c.jittered, c.phase_errors, c.missing_phase_code, c.unpaired_rising, c.unpaired_falling
+            c.missing,
+            c.extra,
+            c.jittered,
+            c.phase_errors,
+            c.missing_phase_code,
+            c.unpaired_rising,
+            c.unpaired_falling
         );
     }
     println!("anomalies   {} total", s.anomalies.total());

@@ -1,0 +1,709 @@
+//! Sequence generation: renders the scene at adaptively spaced times, turns intensity changes into events
+//! (ESIM), renders depth at the 30 Hz exposures through the depth sensor model, and writes a recording
+//! (`docs/recording-format.md`) with the trigger train, ground truth and the object model.
+
+use crate::depth_sensor::DepthSensorModel;
+use crate::esim::{EsimConfig, EsimStats, EventSimulator};
+use crate::motion::{MotionProfile, SpeedLevel, Trajectory};
+use crate::objects::{self, ObjectKind};
+use crate::rig::{Prop, SimRig, grip, hand_mesh, surroundings};
+use crate::rng::SeedRng;
+use drivers::event::{CdEvent, TriggerEdge};
+use drivers::recording::{
+    ContinuousSymmetry, ModelInfo, PoseSample, RecordingError, RecordingMeta, RecordingWriter,
+    TriggerSchedule,
+};
+use drivers::timeline::ideal_edges;
+use nalgebra::{Isometry3, Point3, Vector3};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use tracker::geometry::{PinholeCamera, Roi};
+use tracker::mesh::{Aabb, Mesh, MeshLoadOptions, Symmetry, load_obj};
+use tracker::render::{
+    BackgroundMesh, CpuRenderer, Lighting, MeshId, RenderError, RenderTarget, Renderer, Scene,
+    SceneObject,
+};
+
+/// Which object to put in the scene.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ObjectSource {
+    /// A procedural library object.
+    Library(ObjectKind),
+    /// A user OBJ (metres), copied into the recording with its MTL and textures.
+    File(PathBuf),
+}
+
+/// What to generate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GenerateConfig {
+    /// The tracked object.
+    pub object: ObjectSource,
+    /// Motion profile.
+    pub motion: MotionProfile,
+    /// Speed level.
+    pub speed: SpeedLevel,
+    /// Length, seconds.
+    pub seconds: f64,
+    /// Seed of everything random (trajectory, textures, thresholds, noise).
+    pub seed: u64,
+    /// Event camera model.
+    pub esim: EsimConfig,
+    /// Probability that a depth frame is dropped.
+    pub depth_drop_probability: f64,
+    /// Whether hand-like occluders grip the object.
+    pub hands: bool,
+    /// Largest image motion of any object point between two renders, pixels (ESIM's adaptive sampling).
+    pub max_step_px: f64,
+}
+
+impl GenerateConfig {
+    /// A configuration with the simulator's defaults.
+    pub fn new(
+        object: ObjectSource,
+        motion: MotionProfile,
+        speed: SpeedLevel,
+        seconds: f64,
+        seed: u64,
+    ) -> Self {
+        Self {
+            object,
+            motion,
+            speed,
+            seconds,
+            seed,
+            esim: EsimConfig::default(),
+            depth_drop_probability: 0.0,
+            hands: true,
+            max_step_px: 0.5,
+        }
+    }
+}
+
+/// What a generation produced.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GenerateReport {
+    /// Renders of the event camera's changing region.
+    pub renders: u64,
+    /// Mean rendered region, pixels.
+    pub mean_region_px: f64,
+    /// Event counters.
+    pub esim: EsimStats,
+    /// Trigger edges written.
+    pub trigger_edges: u64,
+    /// Depth frames written.
+    pub depth_frames: u64,
+    /// Depth frames dropped on purpose (the sensor model's frame drops).
+    pub depth_frames_dropped: u64,
+    /// Ground-truth rows written.
+    pub ground_truth_rows: u64,
+}
+
+/// Why generation failed.
+#[derive(Debug, thiserror::Error)]
+pub enum GenerateError {
+    /// A parameter is out of range.
+    #[error("invalid parameter: {0}")]
+    Parameter(String),
+    /// The object or a prop could not be built or loaded.
+    #[error(transparent)]
+    Mesh(#[from] tracker::mesh::MeshError),
+    /// Writing the recording failed.
+    #[error(transparent)]
+    Recording(#[from] RecordingError),
+    /// The renderer refused the scene.
+    #[error("rendering failed: {0}")]
+    Render(#[from] RenderError),
+    /// Copying a user mesh failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
+}
+
+const OBJECT_ID: u16 = 1;
+const HAND_ID: u16 = 2;
+
+/// The scene being simulated: renderer with every mesh registered, the trajectory and the props.
+struct Stage {
+    renderer: CpuRenderer,
+    object: MeshId,
+    hand: MeshId,
+    props: Vec<(MeshId, Isometry3<f64>)>,
+    trajectory: Trajectory,
+    hands: bool,
+    object_box: Aabb,
+    hand_box: Aabb,
+    half_extent: Vector3<f64>,
+}
+
+impl Stage {
+    fn instances(
+        &self,
+        t_s: f64,
+        frame: &Isometry3<f64>,
+    ) -> (Vec<SceneObject>, Vec<BackgroundMesh>) {
+        let pose = self.trajectory.pose(t_s);
+        let mut objects = vec![SceneObject {
+            mesh: self.object,
+            pose: frame * pose,
+            id: OBJECT_ID,
+        }];
+        if let Some(side) = self
+            .hands
+            .then(|| self.trajectory.holding_hand(t_s))
+            .flatten()
+        {
+            objects.push(SceneObject {
+                mesh: self.hand,
+                pose: frame * pose * grip(side, self.half_extent),
+                id: HAND_ID,
+            });
+        }
+        let background = self
+            .props
+            .iter()
+            .map(|(m, p)| BackgroundMesh {
+                mesh: *m,
+                pose: frame * p,
+            })
+            .collect();
+        (objects, background)
+    }
+
+    fn render(
+        &mut self,
+        t_s: f64,
+        frame: &Isometry3<f64>,
+        camera: &PinholeCamera,
+        roi: Option<&Roi>,
+        target: &mut RenderTarget,
+    ) -> Result<(), RenderError> {
+        let (objects, background) = self.instances(t_s, frame);
+        let scene = Scene {
+            lighting: Lighting::default(),
+            ..Scene::objects(&objects).with_background(&background)
+        };
+        match roi {
+            Some(r) => self.renderer.render_roi(&scene, camera, r, target),
+            None => self.renderer.render(&scene, camera, target),
+        }
+    }
+
+    /// Projected corners of the moving meshes' boxes at `t_s` (`None` if any is behind the camera).
+    fn corners(&self, t_s: f64, camera: &PinholeCamera, out: &mut Vec<(f64, f64)>) -> bool {
+        out.clear();
+        let pose = self.trajectory.pose(t_s);
+        let mut boxes = vec![(pose, self.object_box)];
+        if let Some(side) = self
+            .hands
+            .then(|| self.trajectory.holding_hand(t_s))
+            .flatten()
+        {
+            boxes.push((pose * grip(side, self.half_extent), self.hand_box));
+        }
+        for (p, b) in boxes {
+            for k in 0..8 {
+                let c = Point3::new(
+                    if k & 1 == 0 { b.min.x } else { b.max.x },
+                    if k & 2 == 0 { b.min.y } else { b.max.y },
+                    if k & 4 == 0 { b.min.z } else { b.max.z },
+                );
+                match camera.project(&(p * c)) {
+                    Some(uv) => out.push((uv.x, uv.y)),
+                    None => return false,
+                }
+            }
+        }
+        true
+    }
+}
+
+fn model_info(name: &str, mesh: &Mesh, symmetries: &[Symmetry]) -> ModelInfo {
+    let b = mesh.aabb();
+    let mut discrete = Vec::new();
+    let mut continuous = Vec::new();
+    for s in symmetries {
+        match s {
+            Symmetry::Discrete(t) => {
+                let m = t.to_homogeneous();
+                let mut a = [0.0; 16];
+                for r in 0..4 {
+                    for c in 0..4 {
+                        a[r * 4 + c] = m[(r, c)];
+                    }
+                }
+                discrete.push(a);
+            }
+            Symmetry::Continuous { axis, offset } => continuous.push(ContinuousSymmetry {
+                axis: [axis.x, axis.y, axis.z],
+                offset_m: [offset.x, offset.y, offset.z],
+            }),
+        }
+    }
+    ModelInfo {
+        name: name.to_string(),
+        diameter_m: mesh.diameter(),
+        min_m: [b.min.x, b.min.y, b.min.z],
+        size_m: [b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z],
+        symmetries_discrete: discrete,
+        symmetries_continuous: continuous,
+    }
+}
+
+/// Copies a user OBJ with the MTL files it names and the textures those name (relative paths kept).
+fn copy_user_obj(obj: &Path, models: &Path, name: &str) -> Result<(), GenerateError> {
+    let io = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| GenerateError::Io { path, source }
+    };
+    let dir = obj.parent().unwrap_or(Path::new("."));
+    let text = std::fs::read_to_string(obj).map_err(io(obj))?;
+    std::fs::write(models.join(format!("{name}.obj")), &text).map_err(io(obj))?;
+    let mut files: Vec<String> = Vec::new();
+    for line in text.lines() {
+        if let Some(rest) = line.trim().strip_prefix("mtllib ") {
+            for mtl in rest.split_whitespace() {
+                files.push(mtl.to_string());
+                if let Ok(m) = std::fs::read_to_string(dir.join(mtl)) {
+                    for l in m.lines() {
+                        let l = l.trim();
+                        if l.starts_with("map_") {
+                            if let Some(tex) = l.split_whitespace().last() {
+                                files.push(tex.to_string());
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for f in files {
+        let (src, dst) = (dir.join(&f), models.join(&f));
+        if let Some(parent) = dst.parent() {
+            std::fs::create_dir_all(parent).map_err(io(parent))?;
+        }
+        std::fs::copy(&src, &dst).map_err(io(&src))?;
+    }
+    Ok(())
+}
+
+fn check(config: &GenerateConfig) -> Result<(), GenerateError> {
+    let bad = |s: &str| Err(GenerateError::Parameter(s.to_string()));
+    if !(config.seconds.is_finite() && config.seconds > 0.0 && config.seconds <= 600.0) {
+        return bad("seconds must be in (0, 600]");
+    }
+    if !(config.max_step_px.is_finite() && config.max_step_px > 0.01 && config.max_step_px <= 5.0) {
+        return bad("max step must be in (0.01, 5] pixels");
+    }
+    if !(0.0..=1.0).contains(&config.depth_drop_probability) {
+        return bad("depth frame drop probability must be in [0, 1]");
+    }
+    let e = &config.esim;
+    if e.contrast
+        .is_some_and(|c| !(c.is_finite() && c > 0.01 && c < 2.0))
+        || !(e.contrast_spread.is_finite() && e.contrast_spread >= 0.0)
+        || !(e.refractory_us.is_finite() && e.refractory_us >= 0.0)
+        || !(e.noise_rate_hz.is_finite() && (0.0..=100.0).contains(&e.noise_rate_hz))
+        || !(e.log_eps.is_finite() && e.log_eps > 0.0)
+    {
+        return bad(
+            "event camera parameters out of range (contrast in (0.01, 2), spread >= 0, refractory >= 0, noise in [0, 100] Hz, log eps > 0)",
+        );
+    }
+    Ok(())
+}
+
+/// The scene of a configuration, ready to render.
+struct Built {
+    stage: Stage,
+    name: String,
+    info: ModelInfo,
+    library_object: Option<objects::ProceduralObject>,
+}
+
+fn build(config: &GenerateConfig) -> Result<Built, GenerateError> {
+    let (name, mesh, symmetries, library_object) = match &config.object {
+        ObjectSource::Library(kind) => {
+            let o = objects::generate(*kind, config.seed);
+            let mesh = o.to_mesh()?;
+            (kind.name().to_string(), mesh, o.symmetries.clone(), Some(o))
+        }
+        ObjectSource::File(path) => {
+            let loaded = load_obj(path, &MeshLoadOptions::default())?;
+            for w in &loaded.warnings {
+                eprintln!("warning: {}: {w}", path.display());
+            }
+            let stem = path
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("object");
+            let name: String = stem
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || c == '_' || c == '-' {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
+            (name, loaded.mesh, vec![], None)
+        }
+    };
+    let info = model_info(&name, &mesh, &symmetries);
+    let object_box = mesh.aabb();
+    let hand = hand_mesh(config.seed)?;
+    let hand_box = hand.aabb();
+    let mut renderer = CpuRenderer::new();
+    let object = renderer.add_mesh(Arc::new(mesh))?;
+    let hand = renderer.add_mesh(Arc::new(hand))?;
+    let mut props = Vec::new();
+    for Prop { mesh, pose } in surroundings(config.seed)? {
+        props.push((renderer.add_mesh(mesh)?, pose));
+    }
+    let trajectory = Trajectory::new(config.motion, config.speed, config.seed);
+    let half_extent = (object_box.max - object_box.min) / 2.0;
+    let stage = Stage {
+        renderer,
+        object,
+        hand,
+        props,
+        trajectory,
+        hands: config.hands,
+        object_box,
+        hand_box,
+        half_extent,
+    };
+
+    Ok(Built {
+        stage,
+        name,
+        info,
+        library_object,
+    })
+}
+
+/// The event sensor's log intensity over the whole image at `t_s`, exactly as the generator computes it
+/// (render, optics blur, logarithm): for checking recordings against the model.
+pub fn sensor_log_at(config: &GenerateConfig, t_s: f64) -> Result<Vec<f32>, GenerateError> {
+    check(config)?;
+    let cam = SimRig::default().event_camera;
+    let mut built = build(config)?;
+    let mut target = RenderTarget::new();
+    built
+        .stage
+        .render(t_s, &Isometry3::identity(), &cam, None, &mut target)?;
+    let mut log = Vec::new();
+    optics_log(
+        target.intensity(),
+        cam.width,
+        cam.height,
+        (0, 0),
+        (cam.width, cam.height),
+        config.esim.log_eps,
+        &mut log,
+    );
+    Ok(log)
+}
+
+/// The lens and pixel area blur the image: a 3x3 binomial filter (about 0.7 px standard deviation), edges
+/// replicated at the image border. Takes the rendered linear intensity of a `ew x eh` region and writes the log
+/// intensity of its `w x h` inner part starting at `inner` (the region must extend one pixel beyond the inner
+/// part wherever the inner part is not at the image border).
+pub fn optics_log(
+    intensity: &[f32],
+    ew: u32,
+    eh: u32,
+    inner: (u32, u32),
+    (w, h): (u32, u32),
+    eps: f32,
+    out: &mut Vec<f32>,
+) {
+    out.clear();
+    let (ew, eh) = (ew as i64, eh as i64);
+    let at = |x: i64, y: i64| {
+        intensity[(y.clamp(0, eh - 1) * ew + x.clamp(0, ew - 1)) as usize].max(0.0)
+    };
+    for ry in 0..i64::from(h) {
+        let y = ry + i64::from(inner.1);
+        for rx in 0..i64::from(w) {
+            let x = rx + i64::from(inner.0);
+            let row = |yy: i64| at(x - 1, yy) + 2.0 * at(x, yy) + at(x + 1, yy);
+            let v = (row(y - 1) + 2.0 * row(y) + row(y + 1)) / 16.0;
+            out.push((v + eps).ln());
+        }
+    }
+}
+
+/// Generates a recording into `out` (created; existing files are overwritten). `progress` gets the simulated
+/// time done, seconds.
+pub fn generate(
+    config: &GenerateConfig,
+    out: &Path,
+    mut progress: impl FnMut(f64),
+) -> Result<GenerateReport, GenerateError> {
+    check(config)?;
+    let rig = SimRig::default();
+    let Built {
+        mut stage,
+        name,
+        info,
+        library_object,
+    } = build(config)?;
+    let mut writer = RecordingWriter::create(
+        out,
+        rig.camera_rig(),
+        &format!("hil-sim {}", env!("CARGO_PKG_VERSION")),
+    )?;
+    match (&config.object, &library_object) {
+        (_, Some(o)) => {
+            objects::write_object(o, &writer.models_dir())
+                .map_err(|e| GenerateError::Parameter(e.to_string()))?;
+        }
+        (ObjectSource::File(path), None) => copy_user_obj(path, &writer.models_dir(), &name)?,
+        _ => {}
+    }
+
+    let schedule = TriggerSchedule::default();
+    let tl = schedule.timeline_config();
+    let t_end_us = config.seconds * 1e6;
+    let first_pulse_us = 500;
+    let n_ticks = ((t_end_us - first_pulse_us as f64) / tl.period_us())
+        .floor()
+        .max(0.0) as u64
+        + 1;
+    let edges: Vec<TriggerEdge> = ideal_edges(&tl, first_pulse_us, n_ticks)
+        .into_iter()
+        .filter(|e| (e.t_us as f64) < t_end_us)
+        .collect();
+    let depth_times: Vec<(u64, i64)> = edges
+        .iter()
+        .filter(|e| e.rising)
+        .enumerate()
+        .filter(|(i, _)| *i as u32 % tl.ticks_per_depth == 0)
+        .enumerate()
+        .map(|(n, (_, e))| (n as u64, e.t_us))
+        .collect();
+
+    let cam = rig.event_camera;
+    let identity = Isometry3::identity();
+    let depth_frame = rig.t_event_depth.inverse();
+    let depth_model = DepthSensorModel {
+        frame_drop_probability: config.depth_drop_probability,
+        ..DepthSensorModel::d435i(rig.depth_camera.fx)
+    };
+    let mut depth_rng = SeedRng::new(config.seed ^ 0xDE97);
+
+    // Initial state of the sensor.
+    let mut target = RenderTarget::new();
+    stage.render(0.0, &identity, &cam, None, &mut target)?;
+    let eps = config.esim.log_eps;
+    let mut log0 = Vec::new();
+    optics_log(
+        target.intensity(),
+        cam.width,
+        cam.height,
+        (0, 0),
+        (cam.width, cam.height),
+        eps,
+        &mut log0,
+    );
+    let mut sim = EventSimulator::new(cam.width, cam.height, config.esim, config.seed, &log0);
+
+    let mut report = GenerateReport::default();
+    let mut events: Vec<CdEvent> = Vec::new();
+    let mut log: Vec<f32> = Vec::new();
+    let mut depth_target = RenderTarget::new();
+    let mut depth_mm: Vec<u16> = Vec::new();
+    let (mut c0, mut c1) = (Vec::new(), Vec::new());
+    let tick_times: Vec<f64> = edges
+        .iter()
+        .filter(|e| e.rising)
+        .map(|e| e.t_us as f64)
+        .collect();
+    let mut next_tick = 0usize;
+    let mut next_edge = 0usize;
+    let mut next_depth = 0usize;
+    let mut t_us = 0.0f64;
+    let mut dt_us = 200.0f64;
+    let mut region_px_sum = 0.0f64;
+    let target_px = config.max_step_px;
+    while t_us < t_end_us {
+        // Adaptive step: no projected box corner moves more than max_step_px.
+        let full0 = !stage.corners(t_us * 1e-6, &cam, &mut c0);
+        while next_tick < tick_times.len() && tick_times[next_tick] <= t_us {
+            next_tick += 1;
+        }
+        // Never step over a tick: the sensor state is exact at every 120 Hz tick.
+        let horizon = tick_times
+            .get(next_tick)
+            .copied()
+            .unwrap_or(f64::INFINITY)
+            .min(t_end_us);
+        let mut t1 = (t_us + dt_us).min(horizon);
+        for _ in 0..3 {
+            let full1 = !stage.corners(t1 * 1e-6, &cam, &mut c1);
+            let moved = if full0 || full1 || c0.len() != c1.len() {
+                f64::INFINITY
+            } else {
+                c0.iter()
+                    .zip(&c1)
+                    .map(|(a, b)| (a.0 - b.0).hypot(a.1 - b.1))
+                    .fold(0.0, f64::max)
+            };
+            let step = t1 - t_us;
+            if moved <= target_px * 1.05 || step <= 10.0 {
+                break;
+            }
+            let shrink = if moved.is_finite() {
+                (target_px / moved).clamp(0.1, 0.95)
+            } else {
+                0.5
+            };
+            t1 = t_us + (step * shrink).max(10.0);
+        }
+        let step = t1 - t_us;
+        let full1 = !stage.corners(t1 * 1e-6, &cam, &mut c1);
+        // The region that can change: both boxes, plus a margin for shading and bilinear texture support.
+        let (x0, y0, x1, y1) = if full0 || full1 {
+            (0.0, 0.0, f64::from(cam.width), f64::from(cam.height))
+        } else {
+            let (mut lo_x, mut lo_y, mut hi_x, mut hi_y) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+            for &(u, v) in c0.iter().chain(&c1) {
+                lo_x = lo_x.min(u);
+                lo_y = lo_y.min(v);
+                hi_x = hi_x.max(u);
+                hi_y = hi_y.max(v);
+            }
+            let m = 3.0;
+            (
+                (lo_x - m).floor().max(0.0),
+                (lo_y - m).floor().max(0.0),
+                (hi_x + m).ceil().min(f64::from(cam.width)),
+                (hi_y + m).ceil().min(f64::from(cam.height)),
+            )
+        };
+        events.clear();
+        if x1 > x0 && y1 > y0 {
+            let (w, h) = ((x1 - x0) as u32, (y1 - y0) as u32);
+            // Render one pixel more on each side (inside the image) for the optics blur.
+            let (ex0, ey0) = ((x0 - 1.0).max(0.0), (y0 - 1.0).max(0.0));
+            let (ex1, ey1) = (
+                (x1 + 1.0).min(f64::from(cam.width)),
+                (y1 + 1.0).min(f64::from(cam.height)),
+            );
+            let (ew, eh) = ((ex1 - ex0) as u32, (ey1 - ey0) as u32);
+            let roi = Roi::new(ex0, ey0, f64::from(ew), f64::from(eh), ew, eh)
+                .map_err(RenderError::from)?;
+            stage.render(t1 * 1e-6, &identity, &cam, Some(&roi), &mut target)?;
+            let inner = ((x0 - ex0) as u32, (y0 - ey0) as u32);
+            optics_log(target.intensity(), ew, eh, inner, (w, h), eps, &mut log);
+            sim.update_region(t_us, t1, x0 as u32, y0 as u32, w, h, &log, &mut events);
+            report.renders += 1;
+            region_px_sum += f64::from(w) * f64::from(h);
+        }
+        sim.noise(t_us, t1, &mut events);
+        events.sort_unstable_by_key(|e| (e.t_us, e.y, e.polarity, e.x));
+        let edge_start = next_edge;
+        while next_edge < edges.len() && (edges[next_edge].t_us as f64) < t1.floor() {
+            next_edge += 1;
+        }
+        writer.write_events(&events, &edges[edge_start..next_edge])?;
+        report.trigger_edges += (next_edge - edge_start) as u64;
+
+        while next_depth < depth_times.len() && (depth_times[next_depth].1 as f64) < t1 {
+            let (n, td) = depth_times[next_depth];
+            next_depth += 1;
+            if depth_model.drops_frame(&mut depth_rng) {
+                report.depth_frames_dropped += 1;
+                continue;
+            }
+            stage.render(
+                td as f64 * 1e-6,
+                &depth_frame,
+                &rig.depth_camera,
+                None,
+                &mut depth_target,
+            )?;
+            depth_model.measure(
+                depth_target.depth(),
+                depth_target.width(),
+                depth_target.height(),
+                &mut depth_rng,
+                &mut depth_mm,
+            );
+            writer.write_depth_mm(n, &depth_mm)?;
+            report.depth_frames += 1;
+        }
+        progress(t1 * 1e-6);
+        // Next step starts from what worked, allowed to grow.
+        dt_us = (step * 1.5).clamp(10.0, 4000.0);
+        t_us = t1;
+    }
+    // Any trigger edge left (at the very end).
+    if next_edge < edges.len() {
+        writer.write_events(&[], &edges[next_edge..])?;
+        report.trigger_edges += (edges.len() - next_edge) as u64;
+    }
+    report.esim = sim.stats();
+    report.mean_region_px = if report.renders > 0 {
+        region_px_sum / report.renders as f64
+    } else {
+        0.0
+    };
+
+    // Ground truth at 1 kHz plus every tick.
+    let mut times: Vec<i64> = (0..)
+        .map(|k| k * 1000)
+        .take_while(|&t| (t as f64) < t_end_us)
+        .collect();
+    times.extend(edges.iter().filter(|e| e.rising).map(|e| e.t_us));
+    times.sort_unstable();
+    times.dedup();
+    let gt: Vec<PoseSample> = times
+        .iter()
+        .map(|&t| {
+            let p = stage.trajectory.pose(t as f64 * 1e-6);
+            let q = p.rotation.into_inner();
+            PoseSample {
+                t_us: t,
+                object: name.clone(),
+                translation: [p.translation.x, p.translation.y, p.translation.z],
+                rotation_xyzw: [q.i, q.j, q.k, q.w],
+            }
+        })
+        .collect();
+    report.ground_truth_rows = gt.len() as u64;
+    let mut parameters = serde_json::Map::new();
+    for (k, v) in [
+        ("object", json!(name)),
+        ("motion", json!(config.motion.name())),
+        ("speed", json!(config.speed.name())),
+        ("seconds", json!(config.seconds)),
+        ("seed", json!(config.seed)),
+        ("contrast_threshold", json!(sim.contrast())),
+        ("contrast_spread", json!(config.esim.contrast_spread)),
+        ("refractory_us", json!(config.esim.refractory_us)),
+        ("noise_rate_hz", json!(config.esim.noise_rate_hz)),
+        ("hands", json!(config.hands)),
+        ("max_step_px", json!(config.max_step_px)),
+        ("renders", json!(report.renders)),
+        ("signal_events", json!(report.esim.signal_events)),
+        ("noise_events", json!(report.esim.noise_events)),
+        ("refractory_dropped", json!(report.esim.refractory_dropped)),
+        ("depth_frames_dropped", json!(report.depth_frames_dropped)),
+    ] {
+        parameters.insert(k.to_string(), v);
+    }
+    let meta = RecordingMeta {
+        generator: format!("hil-sim {}", env!("CARGO_PKG_VERSION")),
+        trigger: schedule,
+        parameters,
+    };
+    writer.finish(&meta, &[info], Some(&gt))?;
+    Ok(report)
+}

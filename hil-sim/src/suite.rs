@@ -1,0 +1,147 @@
+//! Fixed, named suites of sequences for benchmarking (every library object under several motion profiles and
+//! speed levels), generated once and reused.
+
+use crate::generate::{GenerateConfig, GenerateError, GenerateReport, ObjectSource, generate};
+use crate::motion::{MotionProfile, SpeedLevel};
+use crate::objects::ObjectKind;
+use drivers::recording::Recording;
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+/// One sequence of a suite.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SuiteEntry {
+    /// Directory name inside the suite, e.g. `mug-shake-fast`.
+    pub name: String,
+    /// What to generate.
+    pub config: GenerateConfig,
+}
+
+/// Names of the suites [`suite`] knows.
+pub const SUITES: [&str; 2] = ["dev", "smoke"];
+
+/// The sequences of a named suite: `dev` is every library object under three profiles (one slow, one
+/// moderate, one fast; the six profiles rotate across objects so each appears six times), 3 s each; `smoke`
+/// is two objects, 1 s each, for quick end-to-end checks.
+pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
+    let entry = |kind: ObjectKind,
+                 motion: MotionProfile,
+                 speed: SpeedLevel,
+                 seconds: f64,
+                 seed: u64| SuiteEntry {
+        name: format!("{}-{}-{}", kind.name(), motion.name(), speed.name()),
+        config: GenerateConfig::new(ObjectSource::Library(kind), motion, speed, seconds, seed),
+    };
+    match name {
+        "dev" => {
+            let mut out = Vec::new();
+            for (i, kind) in ObjectKind::ALL.into_iter().enumerate() {
+                for (j, speed) in SpeedLevel::ALL.into_iter().enumerate() {
+                    let motion = MotionProfile::ALL[(i + 2 * j) % MotionProfile::ALL.len()];
+                    out.push(entry(kind, motion, speed, 3.0, 1000 + (i * 3 + j) as u64));
+                }
+            }
+            Some(out)
+        }
+        "smoke" => Some(vec![
+            entry(
+                ObjectKind::Can,
+                MotionProfile::Shake,
+                SpeedLevel::Moderate,
+                1.0,
+                1,
+            ),
+            entry(
+                ObjectKind::Mug,
+                MotionProfile::Translation,
+                SpeedLevel::Slow,
+                1.0,
+                2,
+            ),
+        ]),
+        _ => None,
+    }
+}
+
+/// Whether `dir` already holds a complete recording generated from `config` by this generator version.
+fn up_to_date(dir: &Path, config: &GenerateConfig) -> bool {
+    let Ok(rec) = Recording::open(dir) else {
+        return false;
+    };
+    let p = &rec.meta.parameters;
+    rec.meta.generator == format!("hil-sim {}", env!("CARGO_PKG_VERSION"))
+        && p.get("motion") == Some(&json!(config.motion.name()))
+        && p.get("speed") == Some(&json!(config.speed.name()))
+        && p.get("seconds") == Some(&json!(config.seconds))
+        && p.get("seed") == Some(&json!(config.seed))
+}
+
+/// Generates (or reuses) every sequence of `entries` under `out`, and writes `out/suite.json` listing them.
+/// `on_sequence(index, entry, report)` is called after each one (`report` is `None` when reused).
+pub fn generate_suite(
+    name: &str,
+    entries: &[SuiteEntry],
+    out: &Path,
+    mut on_sequence: impl FnMut(usize, &SuiteEntry, Option<&GenerateReport>),
+    mut progress: impl FnMut(f64),
+) -> Result<Vec<PathBuf>, GenerateError> {
+    let mut dirs = Vec::new();
+    for (i, e) in entries.iter().enumerate() {
+        let dir = out.join(&e.name);
+        if up_to_date(&dir, &e.config) {
+            on_sequence(i, e, None);
+        } else {
+            let report = generate(&e.config, &dir, &mut progress)?;
+            on_sequence(i, e, Some(&report));
+        }
+        dirs.push(dir);
+    }
+    let list: Vec<_> = entries
+        .iter()
+        .map(|e| {
+            let object = match &e.config.object {
+                ObjectSource::Library(k) => k.name().to_string(),
+                ObjectSource::File(p) => p.display().to_string(),
+            };
+            json!({"name": e.name, "object": object, "motion": e.config.motion.name(),
+                   "speed": e.config.speed.name(), "seconds": e.config.seconds, "seed": e.config.seed})
+        })
+        .collect();
+    let path = out.join("suite.json");
+    let text = serde_json::to_string_pretty(&json!({"suite": name, "sequences": list}))
+        .unwrap_or_default();
+    std::fs::write(&path, text).map_err(|source| GenerateError::Io { path, source })?;
+    Ok(dirs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dev_suite_covers_every_object_profile_and_speed() {
+        let s = suite("dev").unwrap();
+        assert_eq!(s.len(), ObjectKind::ALL.len() * 3);
+        for kind in ObjectKind::ALL {
+            let n = s
+                .iter()
+                .filter(|e| e.config.object == ObjectSource::Library(kind))
+                .count();
+            assert_eq!(n, 3, "{kind:?}");
+        }
+        for p in MotionProfile::ALL {
+            assert_eq!(s.iter().filter(|e| e.config.motion == p).count(), 6, "{p}");
+        }
+        for sp in SpeedLevel::ALL {
+            assert_eq!(
+                s.iter().filter(|e| e.config.speed == sp).count(),
+                12,
+                "{sp}"
+            );
+        }
+        let mut names: Vec<_> = s.iter().map(|e| &e.name).collect();
+        names.dedup();
+        assert_eq!(names.len(), s.len());
+        assert!(suite("nope").is_none());
+    }
+}
