@@ -89,18 +89,24 @@ impl EventSink for EventBuffer {
 }
 
 /// A sink that only counts and tracks the time span; memory does not grow with stream length.
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct EventCounter {
     /// Number of ON events.
     pub positive: u64,
     /// Number of OFF events.
     pub negative: u64,
-    /// Earliest timestamp seen (CD or trigger), microseconds.
-    pub t_first_us: Option<i64>,
-    /// Latest timestamp seen (CD or trigger), microseconds.
-    pub t_last_us: Option<i64>,
     /// Trigger edges per channel: `[rising, falling]` counts, index = channel (0..32).
     pub trigger_edges: [[u64; 2]; 32],
+    /// Earliest timestamp seen, `i64::MAX` before any record.
+    t_min: i64,
+    /// Latest timestamp seen, `i64::MIN` before any record.
+    t_max: i64,
+}
+
+impl Default for EventCounter {
+    fn default() -> Self {
+        Self { positive: 0, negative: 0, trigger_edges: [[0; 2]; 32], t_min: i64::MAX, t_max: i64::MIN }
+    }
 }
 
 impl EventCounter {
@@ -114,10 +120,20 @@ impl EventCounter {
         self.positive + self.negative
     }
 
+    /// Earliest timestamp seen (CD or trigger), microseconds.
+    pub fn t_first_us(&self) -> Option<i64> {
+        (self.t_min <= self.t_max).then_some(self.t_min)
+    }
+
+    /// Latest timestamp seen (CD or trigger), microseconds.
+    pub fn t_last_us(&self) -> Option<i64> {
+        (self.t_min <= self.t_max).then_some(self.t_max)
+    }
+
     #[inline]
     fn see(&mut self, t: i64) {
-        self.t_first_us = Some(self.t_first_us.map_or(t, |f| f.min(t)));
-        self.t_last_us = Some(self.t_last_us.map_or(t, |l| l.max(t)));
+        self.t_min = self.t_min.min(t);
+        self.t_max = self.t_max.max(t);
     }
 }
 

@@ -152,7 +152,10 @@ impl Evt3Decoder {
     #[inline(always)]
     fn word<S: EventSink>(&mut self, w: u16, sink: &mut S) {
         let kind = w >> 12;
-        let was_vendor = std::mem::replace(&mut self.in_vendor_group, false);
+        let was_vendor = self.in_vendor_group;
+        if was_vendor {
+            self.in_vendor_group = false;
+        }
         match kind {
             VECT_12 => self.vector(u32::from(w & 0x0FFF), 12, sink),
             VECT_8 => self.vector(u32::from(w & 0x00FF), 8, sink),

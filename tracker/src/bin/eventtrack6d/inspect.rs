@@ -42,7 +42,7 @@ pub fn run(args: &InspectArgs) -> anyhow::Result<()> {
 }
 
 fn duration_us(s: &StreamSummary) -> i64 {
-    match (s.counts.t_first_us, s.counts.t_last_us) {
+    match (s.counts.t_first_us(), s.counts.t_last_us()) {
         (Some(a), Some(b)) => b - a,
         _ => 0,
     }
@@ -85,8 +85,8 @@ fn to_json(s: &StreamSummary) -> serde_json::Value {
         "cd_events": s.counts.cd_events(),
         "positive": s.counts.positive,
         "negative": s.counts.negative,
-        "t_first_us": s.counts.t_first_us,
-        "t_last_us": s.counts.t_last_us,
+        "t_first_us": s.counts.t_first_us(),
+        "t_last_us": s.counts.t_last_us(),
         "duration_us": d,
         "event_rate_hz": rate,
         "trigger_edges": triggers,
@@ -125,7 +125,7 @@ fn print_text(path: &std::path::Path, s: &StreamSummary) {
         println!("header      {k} = {v}");
     }
     println!("data        {} bytes", s.data_bytes);
-    match (s.counts.t_first_us, s.counts.t_last_us) {
+    match (s.counts.t_first_us(), s.counts.t_last_us()) {
         (Some(a), Some(b)) => println!("time        {a} .. {b} us ({:.3} ms)", d as f64 / 1e3),
         _ => println!("time        no timestamped records"),
     }
