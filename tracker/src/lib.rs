@@ -1,5 +1,6 @@
 //! EventTrack6D tracker library.
 
+pub mod eval;
 pub mod geometry;
 pub mod mesh;
 pub mod render;

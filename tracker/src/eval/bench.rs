@@ -1,0 +1,481 @@
+//! The benchmark: pose-tracking methods behind one trait, run over recordings with only the first pose given and
+//! no re-initialisation (the paper's protocol), evaluated per sequence and aggregated per object, and the report
+//! (`results.md`, `results.json`).
+
+use super::pose_csv::PoseRecord;
+use super::recall::AucLimit;
+use super::sequence::{
+    EvalError, ObjectSequence, PoseTrack, Summary, evaluate_object, ground_truth_objects,
+    recording_ticks, summarise,
+};
+use drivers::recording::Recording;
+use drivers::timeline::Tick;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde_json::{Map, Value, json};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// What a method is given for one object in one sequence.
+pub struct MethodInput<'a> {
+    /// The recording (events, depth, cameras, models).
+    pub recording: &'a Recording,
+    /// The 120 Hz ticks at which a pose is expected, in time order.
+    pub ticks: &'a [Tick],
+    /// Object name.
+    pub object: &'a str,
+    /// The only initialisation: the ground-truth pose at the first evaluated tick (time microseconds, `T_cam_obj`).
+    pub first_pose: (i64, Isometry3<f64>),
+    /// Ground truth of the object, for oracle baselines only (`gt-noise`); real trackers must not read it.
+    pub oracle: &'a PoseTrack,
+}
+
+/// A pose-tracking method under benchmark.
+pub trait Method {
+    /// Name in reports (the spec it was built from, e.g. `gt-noise:10:5`).
+    fn name(&self) -> &str;
+    /// Tracks `input.object` over the recording and returns its poses (typically one per tick).
+    fn track(&mut self, input: &MethodInput<'_>) -> Result<Vec<PoseRecord>, EvalError>;
+}
+
+/// Holds the first pose forever: the floor any tracker must beat.
+#[derive(Debug, Clone, Default)]
+pub struct StaticMethod;
+
+impl Method for StaticMethod {
+    fn name(&self) -> &str {
+        "static"
+    }
+    fn track(&mut self, input: &MethodInput<'_>) -> Result<Vec<PoseRecord>, EvalError> {
+        let (t0, pose) = input.first_pose;
+        Ok(input
+            .ticks
+            .iter()
+            .filter(|t| t.t_us >= t0)
+            .map(|t| record(t.t_us, input.object, pose, 1.0))
+            .collect())
+    }
+}
+
+/// Ground truth at every tick plus independent Gaussian noise: translation with `sigma_m` metres per axis and a
+/// rotation by an axis-angle vector with `sigma_rad` radians per component. Seeded: repeatable.
+#[derive(Debug, Clone)]
+pub struct GtNoiseMethod {
+    name: String,
+    /// Translation noise standard deviation per axis, metres.
+    pub sigma_m: f64,
+    /// Rotation noise standard deviation per axis-angle component, radians.
+    pub sigma_rad: f64,
+    seed: u64,
+}
+
+impl GtNoiseMethod {
+    /// Default noise: 5 mm, 2 degrees.
+    pub const DEFAULT_MM: f64 = 5.0;
+    /// Default rotation noise, degrees.
+    pub const DEFAULT_DEG: f64 = 2.0;
+
+    /// A method adding `sigma_mm` millimetres and `sigma_deg` degrees of noise; `name` is its report name.
+    pub fn new(name: &str, sigma_mm: f64, sigma_deg: f64, seed: u64) -> Self {
+        Self {
+            name: name.into(),
+            sigma_m: sigma_mm / 1000.0,
+            sigma_rad: sigma_deg.to_radians(),
+            seed,
+        }
+    }
+}
+
+fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
+    // Box-Muller.
+    let u1: f64 = rng.random::<f64>().max(f64::MIN_POSITIVE);
+    let u2: f64 = rng.random();
+    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+}
+
+fn name_hash(s: &str) -> u64 {
+    // FNV-1a: a stable per-object seed offset.
+    s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x100_0000_01b3)
+    })
+}
+
+impl Method for GtNoiseMethod {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn track(&mut self, input: &MethodInput<'_>) -> Result<Vec<PoseRecord>, EvalError> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ name_hash(input.object));
+        let mut out = Vec::with_capacity(input.ticks.len());
+        for t in input.ticks {
+            let Some(gt) = input.oracle.interpolated_at(t.t_us) else {
+                continue;
+            };
+            let dt = Vector3::from_fn(|_, _| gaussian(&mut rng) * self.sigma_m);
+            let dr = Vector3::from_fn(|_, _| gaussian(&mut rng) * self.sigma_rad);
+            let noisy = Isometry3::from_parts(
+                Translation3::from(gt.translation.vector + dt),
+                UnitQuaternion::from_scaled_axis(dr) * gt.rotation,
+            );
+            out.push(record(t.t_us, input.object, noisy, 1.0));
+        }
+        Ok(out)
+    }
+}
+
+fn record(t_us: i64, object: &str, pose: Isometry3<f64>, quality: f64) -> PoseRecord {
+    PoseRecord {
+        t_us,
+        object: object.into(),
+        pose,
+        quality,
+        state: "tracking".into(),
+    }
+}
+
+/// Builds a method from its spec: `static`, `gt-noise` (5 mm, 2 deg) or `gt-noise:MM:DEG`.
+pub fn method_from_spec(spec: &str) -> Result<Box<dyn Method>, String> {
+    let spec = spec.trim();
+    if spec == "static" {
+        return Ok(Box::new(StaticMethod));
+    }
+    if spec == "gt-noise" {
+        return Ok(Box::new(GtNoiseMethod::new(
+            spec,
+            GtNoiseMethod::DEFAULT_MM,
+            GtNoiseMethod::DEFAULT_DEG,
+            1,
+        )));
+    }
+    if let Some(rest) = spec.strip_prefix("gt-noise:") {
+        let parts: Vec<&str> = rest.split(':').collect();
+        let parse = |s: &str, what: &str| -> Result<f64, String> {
+            s.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v >= 0.0)
+                .ok_or_else(|| format!("method `{spec}`: {what} `{s}` is not a number >= 0"))
+        };
+        if parts.len() != 2 {
+            return Err(format!(
+                "method `{spec}`: expected gt-noise:MM:DEG (e.g. gt-noise:10:5)"
+            ));
+        }
+        let mm = parse(parts[0], "translation noise (mm)")?;
+        let deg = parse(parts[1], "rotation noise (degrees)")?;
+        return Ok(Box::new(GtNoiseMethod::new(spec, mm, deg, 1)));
+    }
+    Err(format!(
+        "unknown method `{spec}`: available are static, gt-noise, gt-noise:MM:DEG"
+    ))
+}
+
+/// One sequence of a suite.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SuiteSequence {
+    /// Sequence name (its directory name).
+    pub name: String,
+    /// The recording directory.
+    pub dir: std::path::PathBuf,
+    /// Motion profile (from `suite.json`, else the recording's generator parameters, else `-`).
+    pub motion: String,
+    /// Speed class (as `motion`).
+    pub speed: String,
+}
+
+/// One method's results on one object of one sequence.
+#[derive(Debug, Clone)]
+pub struct SequenceResult {
+    /// The sequence.
+    pub sequence: SuiteSequence,
+    /// Frame scores of the object.
+    pub scores: ObjectSequence,
+    /// Poses the method produced.
+    pub poses: usize,
+    /// Seconds the method spent producing them (wall clock).
+    pub seconds: f64,
+}
+
+/// All results of one method.
+#[derive(Debug, Clone, Default)]
+pub struct MethodResults {
+    /// Method name.
+    pub name: String,
+    /// Per sequence (and object).
+    pub sequences: Vec<SequenceResult>,
+}
+
+impl MethodResults {
+    /// Poses per second of method run time over every sequence (infinite when it took no measurable time).
+    pub fn update_hz(&self) -> f64 {
+        let poses: usize = self.sequences.iter().map(|s| s.poses).sum();
+        let secs: f64 = self.sequences.iter().map(|s| s.seconds).sum();
+        if secs > 0.0 {
+            poses as f64 / secs
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// Summary per object (frames of every sequence of that object pooled), 120 Hz or 30 Hz (`depth_only`).
+    pub fn per_object(&self, depth_only: bool, limit: AucLimit) -> BTreeMap<String, Summary> {
+        let mut by_object: BTreeMap<String, Vec<&SequenceResult>> = BTreeMap::new();
+        for s in &self.sequences {
+            by_object
+                .entry(s.scores.object.clone())
+                .or_default()
+                .push(s);
+        }
+        by_object
+            .into_iter()
+            .map(|(object, seqs)| {
+                let frames: Vec<_> = seqs
+                    .iter()
+                    .flat_map(|s| s.scores.frames.iter())
+                    .filter(|f| !depth_only || f.depth_tick)
+                    .collect();
+                (object, summarise(&frames, seqs[0].scores.diameter, limit))
+            })
+            .collect()
+    }
+
+    /// Mean over objects of the per-object summaries (percent); `frames` is the total.
+    pub fn mean(&self, depth_only: bool, limit: AucLimit) -> Summary {
+        let per = self.per_object(depth_only, limit);
+        let n = per.len().max(1) as f64;
+        Summary {
+            add_s: per.values().map(|s| s.add_s).sum::<f64>() / n,
+            add: per.values().map(|s| s.add).sum::<f64>() / n,
+            ar: per.values().map(|s| s.ar).sum::<f64>() / n,
+            frames: per.values().map(|s| s.frames).sum(),
+        }
+    }
+}
+
+/// Runs `method` over one sequence: every object with ground truth, initialised from the ground truth at the
+/// first tick only, then evaluated at every tick.
+pub fn run_sequence(
+    method: &mut dyn Method,
+    sequence: &SuiteSequence,
+    recording: &Recording,
+    ticks: &[Tick],
+) -> Result<Vec<SequenceResult>, EvalError> {
+    let mut out = Vec::new();
+    for object in ground_truth_objects(recording)? {
+        let gt = PoseTrack::from_samples(recording.ground_truth.as_deref().unwrap_or(&[]), &object);
+        let Some(first) = ticks
+            .iter()
+            .find_map(|t| gt.interpolated_at(t.t_us).map(|p| (t.t_us, p)))
+        else {
+            continue;
+        };
+        let input = MethodInput {
+            recording,
+            ticks,
+            object: &object,
+            first_pose: first,
+            oracle: &gt,
+        };
+        let start = Instant::now();
+        let poses = method.track(&input)?;
+        let seconds = start.elapsed().as_secs_f64();
+        let track = PoseTrack::from_records(&poses, &object);
+        let scores = evaluate_object(recording, ticks, &object, &track)?;
+        out.push(SequenceResult {
+            sequence: sequence.clone(),
+            scores,
+            poses: poses.len(),
+            seconds,
+        });
+    }
+    Ok(out)
+}
+
+/// Opens a sequence's recording and its ticks (shared by every method).
+pub fn open_sequence(sequence: &SuiteSequence) -> Result<(Recording, Vec<Tick>), EvalError> {
+    let rec = Recording::open(&sequence.dir)?;
+    let ticks = recording_ticks(&rec)?;
+    Ok((rec, ticks))
+}
+
+fn summary_json(s: &Summary) -> Value {
+    json!({"add_s": s.add_s, "add": s.add, "ar": s.ar, "frames": s.frames})
+}
+
+fn finite_or_null(x: f64) -> Value {
+    if x.is_finite() { json!(x) } else { Value::Null }
+}
+
+/// The `results.json` document: per method the object-mean at 120 Hz and 30 Hz, the update rate, per-object and
+/// per-sequence summaries (AUC and AR in percent, 0-100; AUC thresholds to 0.1 x diameter).
+pub fn results_json(suite: &str, results: &[MethodResults]) -> Value {
+    let limit = AucLimit::Diameter;
+    let mut methods = Map::new();
+    for m in results {
+        let mut seqs = Map::new();
+        for s in &m.sequences {
+            let a = s.scores.summary(false, limit);
+            let b = s.scores.summary(true, limit);
+            let key = if seqs.contains_key(&s.sequence.name) {
+                format!("{}/{}", s.sequence.name, s.scores.object)
+            } else {
+                s.sequence.name.clone()
+            };
+            seqs.insert(
+                key,
+                json!({
+                    "object": s.scores.object, "motion": s.sequence.motion, "speed": s.sequence.speed,
+                    "add_s": a.add_s, "add": a.add, "ar": a.ar, "frames": a.frames,
+                    "add_s_30hz": b.add_s, "add_30hz": b.add, "ar_30hz": b.ar, "frames_30hz": b.frames,
+                    "diameter_m": s.scores.diameter,
+                }),
+            );
+        }
+        let objects: Map<String, Value> = m
+            .per_object(false, limit)
+            .into_iter()
+            .zip(m.per_object(true, limit))
+            .map(|((o, a), (_, b))| {
+                (
+                    o,
+                    json!({"hz120": summary_json(&a), "hz30": summary_json(&b)}),
+                )
+            })
+            .collect();
+        methods.insert(
+            m.name.clone(),
+            json!({
+                "mean": summary_json(&m.mean(false, limit)),
+                "mean_30hz": summary_json(&m.mean(true, limit)),
+                "update_hz": finite_or_null(m.update_hz()),
+                "objects": objects,
+                "sequences": seqs,
+            }),
+        );
+    }
+    json!({"suite": suite, "auc_threshold": "0.1 x diameter", "methods": methods})
+}
+
+fn cells(s: Option<&Summary>) -> String {
+    match s {
+        Some(s) => format!(" {:.1} | {:.1} | {:.1} |", s.add_s, s.add, s.ar),
+        None => " - | - | - |".into(),
+    }
+}
+
+fn table(out: &mut String, results: &[MethodResults], depth_only: bool, with_rate: bool) {
+    let limit = AucLimit::Diameter;
+    let per: Vec<BTreeMap<String, Summary>> = results
+        .iter()
+        .map(|m| m.per_object(depth_only, limit))
+        .collect();
+    let mut objects: Vec<&String> = per.iter().flat_map(|p| p.keys()).collect();
+    objects.sort();
+    objects.dedup();
+    out.push_str("| object |");
+    for m in results {
+        let _ = write!(out, " {0} ADD-S | {0} ADD | {0} AR |", m.name);
+    }
+    out.push_str("\n| --- |");
+    for _ in results {
+        out.push_str(" ---: | ---: | ---: |");
+    }
+    out.push('\n');
+    for o in &objects {
+        let _ = write!(out, "| {o} |");
+        for p in &per {
+            out.push_str(&cells(p.get(*o)));
+        }
+        out.push('\n');
+    }
+    out.push_str("| **MEAN** |");
+    for m in results {
+        out.push_str(&cells(Some(&m.mean(depth_only, limit))));
+    }
+    out.push('\n');
+    if with_rate {
+        out.push_str("| update rate (Hz) |");
+        for m in results {
+            let hz = m.update_hz();
+            if hz.is_finite() {
+                let _ = write!(out, " {hz:.0} | | |");
+            } else {
+                out.push_str(" - | | |");
+            }
+        }
+        out.push('\n');
+    }
+}
+
+/// The `results.md` report: per-object tables (rows = objects, columns = ADD-S / ADD / AR per method) at 120 Hz
+/// (every tick, with the update rate) and at 30 Hz (depth-exposure ticks), then a per-sequence table.
+pub fn results_markdown(suite: &str, results: &[MethodResults]) -> String {
+    let mut s = format!(
+        "# Benchmark `{suite}`\n\nAUC of ADD-S and ADD (thresholds 0 to 0.1 x object diameter) and BOP AR \
+         (mean of VSD, MSSD, MSPD recalls, per frame), in percent. Protocol: first pose from ground truth, no \
+         re-initialisation. Update rate = poses per second of method run time.\n\n## 120 Hz (every tick)\n\n"
+    );
+    table(&mut s, results, false, true);
+    s.push_str("\n## 30 Hz (depth-exposure ticks only)\n\n");
+    table(&mut s, results, true, false);
+    s.push_str("\n## Per sequence (120 Hz)\n\n| sequence | object | motion | speed |");
+    for m in results {
+        let _ = write!(s, " {0} ADD-S | {0} ADD | {0} AR |", m.name);
+    }
+    s.push_str("\n| --- | --- | --- | --- |");
+    for _ in results {
+        s.push_str(" ---: | ---: | ---: |");
+    }
+    s.push('\n');
+    if let Some(first) = results.first() {
+        for (i, r) in first.sequences.iter().enumerate() {
+            let _ = write!(
+                s,
+                "| {} | {} | {} | {} |",
+                r.sequence.name, r.scores.object, r.sequence.motion, r.sequence.speed
+            );
+            for m in results {
+                let cell = m
+                    .sequences
+                    .get(i)
+                    .map(|x| x.scores.summary(false, AucLimit::Diameter));
+                s.push_str(&cells(cell.as_ref()));
+            }
+            s.push('\n');
+        }
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn method_specs() {
+        assert_eq!(method_from_spec("static").unwrap().name(), "static");
+        assert_eq!(method_from_spec("gt-noise").unwrap().name(), "gt-noise");
+        assert_eq!(
+            method_from_spec("gt-noise:10:5").unwrap().name(),
+            "gt-noise:10:5"
+        );
+        let e = method_from_spec("gt-noise:x:5").err().unwrap();
+        assert!(e.contains("translation noise"), "{e}");
+        let e = method_from_spec("foundationpose").err().unwrap();
+        assert!(e.contains("unknown method `foundationpose`"), "{e}");
+        assert!(method_from_spec("gt-noise:1").is_err());
+    }
+
+    #[test]
+    fn gaussian_has_unit_variance() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let xs: Vec<f64> = (0..20000).map(|_| gaussian(&mut rng)).collect();
+        let mean = xs.iter().sum::<f64>() / xs.len() as f64;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / xs.len() as f64;
+        assert!(
+            mean.abs() < 0.03 && (var - 1.0).abs() < 0.05,
+            "{mean} {var}"
+        );
+    }
+}

@@ -1,0 +1,245 @@
+//! Tracker pose files: the tracker output CSV `t_us,object,x,y,z,qx,qy,qz,qw,quality,state` and its export to the
+//! BOP results CSV (`scene_id,im_id,obj_id,score,R,t,time`).
+
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use std::fmt::Write as _;
+
+/// Header line of the tracker output CSV.
+pub const POSE_CSV_HEADER: &str = "t_us,object,x,y,z,qx,qy,qz,qw,quality,state";
+
+/// One tracker output row: the pose of one object at one time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseRecord {
+    /// Time, microseconds on the event camera's clock.
+    pub t_us: i64,
+    /// Object name (as in the recording's `models_info.json`).
+    pub object: String,
+    /// `T_cam_obj` in the event camera frame, metres.
+    pub pose: Isometry3<f64>,
+    /// Tracking quality, unitless, 0 (lost) to 1 (confident).
+    pub quality: f64,
+    /// Tracker state name (e.g. `tracking`, `lost`).
+    pub state: String,
+}
+
+/// Why a pose CSV could not be read; names the line.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("pose CSV line {line}: {reason}")]
+pub struct PoseCsvError {
+    /// 1-based line number.
+    pub line: usize,
+    /// What is wrong.
+    pub reason: String,
+}
+
+/// Parses tracker output CSV text (header line required, blank lines ignored); rows keep file order.
+pub fn parse_pose_csv(text: &str) -> Result<Vec<PoseRecord>, PoseCsvError> {
+    let mut lines = text.lines().enumerate();
+    match lines.next() {
+        Some((_, h)) if h.trim() == POSE_CSV_HEADER => {}
+        Some((_, h)) => {
+            return Err(PoseCsvError {
+                line: 1,
+                reason: format!("expected header `{POSE_CSV_HEADER}`, found `{}`", h.trim()),
+            });
+        }
+        None => {
+            return Err(PoseCsvError {
+                line: 1,
+                reason: "empty file (no header)".into(),
+            });
+        }
+    }
+    let mut out = Vec::new();
+    for (i, raw) in lines {
+        let line = i + 1;
+        let raw = raw.trim();
+        if raw.is_empty() {
+            continue;
+        }
+        let err = |reason: String| PoseCsvError { line, reason };
+        let f: Vec<&str> = raw.split(',').map(str::trim).collect();
+        if f.len() != 11 {
+            return Err(err(format!("expected 11 fields, found {}", f.len())));
+        }
+        let t_us: i64 = f[0]
+            .parse()
+            .map_err(|_| err(format!("t_us `{}` is not an integer", f[0])))?;
+        if f[1].is_empty() {
+            return Err(err("object name is empty".into()));
+        }
+        let mut v = [0.0f64; 8];
+        let names = ["x", "y", "z", "qx", "qy", "qz", "qw", "quality"];
+        for k in 0..8 {
+            v[k] = f[k + 2]
+                .parse()
+                .ok()
+                .filter(|x: &f64| x.is_finite())
+                .ok_or_else(|| {
+                    err(format!(
+                        "{} `{}` is not a finite number",
+                        names[k],
+                        f[k + 2]
+                    ))
+                })?;
+        }
+        let q = Quaternion::new(v[6], v[3], v[4], v[5]);
+        let norm = q.norm();
+        if (norm - 1.0).abs() > 1e-3 {
+            return Err(err(format!("quaternion norm {norm:.6} is not 1")));
+        }
+        out.push(PoseRecord {
+            t_us,
+            object: f[1].to_string(),
+            pose: Isometry3::from_parts(
+                Translation3::new(v[0], v[1], v[2]),
+                UnitQuaternion::from_quaternion(q),
+            ),
+            quality: v[7],
+            state: f[10].to_string(),
+        });
+    }
+    Ok(out)
+}
+
+/// Formats rows as tracker output CSV (with header), full precision.
+pub fn format_pose_csv(records: &[PoseRecord]) -> String {
+    let mut s = String::from(POSE_CSV_HEADER);
+    s.push('\n');
+    for r in records {
+        let t = r.pose.translation.vector;
+        let q = r.pose.rotation.coords; // (i, j, k, w)
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{}",
+            r.t_us, r.object, t.x, t.y, t.z, q.x, q.y, q.z, q.w, r.quality, r.state
+        );
+    }
+    s
+}
+
+/// Header line of the BOP results CSV.
+pub const BOP_CSV_HEADER: &str = "scene_id,im_id,obj_id,score,R,t,time";
+
+/// One BOP results row: `scene_id` (sequence number), `im_id` (frame / tick index), `obj_id` (numeric object id),
+/// `score` (the tracker quality) and the pose; `time_s` is the per-image run time in seconds (-1 when unknown).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BopRow {
+    /// Scene (sequence) number.
+    pub scene_id: u32,
+    /// Image (tick) number within the scene.
+    pub im_id: u64,
+    /// Numeric object id.
+    pub obj_id: u32,
+    /// Confidence score.
+    pub score: f64,
+    /// `T_cam_obj`, metres (written as R row-major and t in millimetres, as BOP).
+    pub pose: Isometry3<f64>,
+    /// Run time per image, seconds; -1 = unknown.
+    pub time_s: f64,
+}
+
+/// Formats BOP results CSV text: R as 9 space-separated row-major numbers, t in millimetres.
+pub fn format_bop_csv(rows: &[BopRow]) -> String {
+    let mut s = String::from(BOP_CSV_HEADER);
+    s.push('\n');
+    for r in rows {
+        let m = r.pose.rotation.to_rotation_matrix();
+        let m = m.matrix();
+        let rot: Vec<String> = (0..3)
+            .flat_map(|i| (0..3).map(move |j| (i, j)))
+            .map(|(i, j)| format!("{}", m[(i, j)]))
+            .collect();
+        let t = r.pose.translation.vector * 1000.0;
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{} {} {},{}",
+            r.scene_id,
+            r.im_id,
+            r.obj_id,
+            r.score,
+            rot.join(" "),
+            t.x,
+            t.y,
+            t.z,
+            r.time_s
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    fn sample() -> PoseRecord {
+        PoseRecord {
+            t_us: 8333,
+            object: "can".into(),
+            pose: Isometry3::new(Vector3::new(0.1, -0.2, 0.5), Vector3::new(0.0, 0.0, 0.3)),
+            quality: 0.75,
+            state: "tracking".into(),
+        }
+    }
+
+    #[test]
+    fn round_trip() {
+        let rows = vec![sample()];
+        let text = format_pose_csv(&rows);
+        let back = parse_pose_csv(&text).unwrap();
+        assert_eq!(back.len(), 1);
+        assert_eq!(back[0].t_us, 8333);
+        assert_eq!(back[0].state, "tracking");
+        assert!(
+            (back[0].pose.to_homogeneous() - rows[0].pose.to_homogeneous())
+                .abs()
+                .max()
+                < 1e-12
+        );
+    }
+
+    #[test]
+    fn bad_rows_name_line_and_field() {
+        let e = parse_pose_csv("t_us,object\n").unwrap_err();
+        assert_eq!(e.line, 1);
+        let e = parse_pose_csv(&format!("{POSE_CSV_HEADER}\n\n1,can,0,0,x,0,0,0,1,1,ok\n"))
+            .unwrap_err();
+        assert_eq!(e.line, 3);
+        assert!(e.reason.contains("z `x`"), "{e}");
+        let e =
+            parse_pose_csv(&format!("{POSE_CSV_HEADER}\n1,can,0,0,1,0,0,0,2,1,ok\n")).unwrap_err();
+        assert!(e.reason.contains("norm"), "{e}");
+        let e = parse_pose_csv(&format!("{POSE_CSV_HEADER}\n1,can,0,0,1\n")).unwrap_err();
+        assert!(e.reason.contains("11 fields"), "{e}");
+    }
+
+    #[test]
+    fn bop_row_hand_computed() {
+        // 90 degrees about z: R = [[0,-1,0],[1,0,0],[0,0,1]]; t = (0.1, 0, 0.5) m -> (100, 0, 500) mm.
+        let pose = Isometry3::new(
+            Vector3::new(0.1, 0.0, 0.5),
+            Vector3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2),
+        );
+        let text = format_bop_csv(&[BopRow {
+            scene_id: 2,
+            im_id: 7,
+            obj_id: 3,
+            score: 0.5,
+            pose,
+            time_s: -1.0,
+        }]);
+        let line = text.lines().nth(1).unwrap();
+        let f: Vec<&str> = line.split(',').collect();
+        assert_eq!(&f[..4], &["2", "7", "3", "0.5"]);
+        let r: Vec<f64> = f[4].split(' ').map(|v| v.parse().unwrap()).collect();
+        let expect = [0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0];
+        assert!(
+            r.iter().zip(expect).all(|(a, b)| (a - b).abs() < 1e-12),
+            "{r:?}"
+        );
+        let t: Vec<f64> = f[5].split(' ').map(|v| v.parse().unwrap()).collect();
+        assert!((t[0] - 100.0).abs() < 1e-9 && t[1].abs() < 1e-9 && (t[2] - 500.0).abs() < 1e-9);
+        assert_eq!(f[6], "-1");
+    }
+}
