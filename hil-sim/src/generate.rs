@@ -19,10 +19,10 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use tracker::geometry::{PinholeCamera, Roi};
-use tracker::mesh::{Aabb, Mesh, MeshLoadOptions, Symmetry, load_obj};
+use tracker::mesh::{Mesh, MeshLoadOptions, Symmetry, load_obj};
 use tracker::render::{
-    BackgroundMesh, CpuRenderer, Lighting, MeshId, RenderError, RenderTarget, Renderer, Scene,
-    SceneObject,
+    BackgroundMesh, CpuRenderer, Lighting, MASK_EMPTY, MeshId, RenderError, RenderTarget, Renderer,
+    Scene, SceneObject,
 };
 
 /// Which object to put in the scene.
@@ -135,8 +135,9 @@ struct Stage {
     props: Vec<(MeshId, Isometry3<f64>)>,
     trajectory: Trajectory,
     hands: bool,
-    object_box: Aabb,
-    hand_box: Aabb,
+    /// Mesh vertices (object frame): a mesh's projected extremes are among its projected vertices.
+    object_points: Vec<Point3<f64>>,
+    hand_points: Vec<Point3<f64>>,
     half_extent: Vector3<f64>,
 }
 
@@ -145,6 +146,7 @@ impl Stage {
         &self,
         t_s: f64,
         frame: &Isometry3<f64>,
+        with_props: bool,
     ) -> (Vec<SceneObject>, Vec<BackgroundMesh>) {
         let pose = self.trajectory.pose(t_s);
         let mut objects = vec![SceneObject {
@@ -166,6 +168,7 @@ impl Stage {
         let background = self
             .props
             .iter()
+            .filter(|_| with_props)
             .map(|(m, p)| BackgroundMesh {
                 mesh: *m,
                 pose: frame * p,
@@ -174,6 +177,8 @@ impl Stage {
         (objects, background)
     }
 
+    /// Renders the scene at `t_s` (the props too when `with_props`; otherwise only the moving meshes, for
+    /// compositing over the cached static background, which always lies behind them).
     fn render(
         &mut self,
         t_s: f64,
@@ -181,8 +186,9 @@ impl Stage {
         camera: &PinholeCamera,
         roi: Option<&Roi>,
         target: &mut RenderTarget,
+        with_props: bool,
     ) -> Result<(), RenderError> {
-        let (objects, background) = self.instances(t_s, frame);
+        let (objects, background) = self.instances(t_s, frame, with_props);
         let scene = Scene {
             lighting: Lighting::default(),
             ..Scene::objects(&objects).with_background(&background)
@@ -193,26 +199,30 @@ impl Stage {
         }
     }
 
-    /// Projected corners of the moving meshes' boxes at `t_s` (`None` if any is behind the camera).
-    fn corners(&self, t_s: f64, camera: &PinholeCamera, out: &mut Vec<(f64, f64)>) -> bool {
+    /// Projects every `stride`-th vertex of the moving meshes at `t_s` into `out` (`false` if one is behind the
+    /// camera).
+    fn project(
+        &self,
+        t_s: f64,
+        camera: &PinholeCamera,
+        stride: usize,
+        out: &mut Vec<(f64, f64)>,
+    ) -> bool {
         out.clear();
         let pose = self.trajectory.pose(t_s);
-        let mut boxes = vec![(pose, self.object_box)];
-        if let Some(side) = self
+        let hand = self
             .hands
             .then(|| self.trajectory.holding_hand(t_s))
-            .flatten()
-        {
-            boxes.push((pose * grip(side, self.half_extent), self.hand_box));
-        }
-        for (p, b) in boxes {
-            for k in 0..8 {
-                let c = Point3::new(
-                    if k & 1 == 0 { b.min.x } else { b.max.x },
-                    if k & 2 == 0 { b.min.y } else { b.max.y },
-                    if k & 4 == 0 { b.min.z } else { b.max.z },
-                );
-                match camera.project(&(p * c)) {
+            .flatten();
+        let hand_pose = hand.map(|side| pose * grip(side, self.half_extent));
+        let sets = [
+            (Some(pose), &self.object_points),
+            (hand_pose, &self.hand_points),
+        ];
+        for (p, points) in sets {
+            let Some(p) = p else { continue };
+            for q in points.iter().step_by(stride.max(1)) {
+                match camera.project(&(p * q)) {
                     Some(uv) => out.push((uv.x, uv.y)),
                     None => return false,
                 }
@@ -357,7 +367,13 @@ fn build(config: &GenerateConfig) -> Result<Built, GenerateError> {
     let info = model_info(&name, &mesh, &symmetries);
     let object_box = mesh.aabb();
     let hand = hand_mesh(config.seed)?;
-    let hand_box = hand.aabb();
+    let points = |m: &Mesh| {
+        m.positions()
+            .iter()
+            .map(|p| p.cast::<f64>())
+            .collect::<Vec<Point3<f64>>>()
+    };
+    let (object_points, hand_points) = (points(&mesh), points(&hand));
     let mut renderer = CpuRenderer::new();
     let object = renderer.add_mesh(Arc::new(mesh))?;
     let hand = renderer.add_mesh(Arc::new(hand))?;
@@ -374,8 +390,8 @@ fn build(config: &GenerateConfig) -> Result<Built, GenerateError> {
         props,
         trajectory,
         hands: config.hands,
-        object_box,
-        hand_box,
+        object_points,
+        hand_points,
         half_extent,
     };
 
@@ -396,7 +412,7 @@ pub fn sensor_log_at(config: &GenerateConfig, t_s: f64) -> Result<Vec<f32>, Gene
     let mut target = RenderTarget::new();
     built
         .stage
-        .render(t_s, &Isometry3::identity(), &cam, None, &mut target)?;
+        .render(t_s, &Isometry3::identity(), &cam, None, &mut target, true)?;
     let mut log = Vec::new();
     optics_log(
         target.intensity(),
@@ -423,20 +439,29 @@ pub fn optics_log(
     eps: f32,
     out: &mut Vec<f32>,
 ) {
-    out.clear();
-    let (ew, eh) = (ew as i64, eh as i64);
-    let at = |x: i64, y: i64| {
-        intensity[(y.clamp(0, eh - 1) * ew + x.clamp(0, ew - 1)) as usize].max(0.0)
-    };
-    for ry in 0..i64::from(h) {
-        let y = ry + i64::from(inner.1);
-        for rx in 0..i64::from(w) {
-            let x = rx + i64::from(inner.0);
-            let row = |yy: i64| at(x - 1, yy) + 2.0 * at(x, yy) + at(x + 1, yy);
-            let v = (row(y - 1) + 2.0 * row(y) + row(y + 1)) / 16.0;
-            out.push((v + eps).ln());
+    let (ew, eh, w, h) = (ew as usize, eh as usize, w as usize, h as usize);
+    let (ix, iy) = (inner.0 as usize, inner.1 as usize);
+    // Horizontal [1 2 1] pass over the rows the vertical pass needs (row iy - 1 .. iy + h, clamped).
+    let mut rows = std::mem::take(out);
+    rows.clear();
+    rows.reserve((h + 2) * w);
+    for r in 0..h + 2 {
+        let y = (iy + r).saturating_sub(1).min(eh - 1);
+        let row = &intensity[y * ew..(y + 1) * ew];
+        for x in ix..ix + w {
+            let (l, c, rt) = (row[x.saturating_sub(1)], row[x], row[(x + 1).min(ew - 1)]);
+            rows.push(l.max(0.0) + 2.0 * c.max(0.0) + rt.max(0.0));
         }
     }
+    // Vertical [1 2 1] pass, in place from the top (each output row only reads rows at or below it).
+    for y in 0..h {
+        for x in 0..w {
+            let v = (rows[y * w + x] + 2.0 * rows[(y + 1) * w + x] + rows[(y + 2) * w + x]) / 16.0;
+            rows[y * w + x] = (v + eps).ln();
+        }
+    }
+    rows.truncate(h * w);
+    *out = rows;
 }
 
 /// Generates a recording into `out` (created; existing files are overwritten). `progress` gets the simulated
@@ -500,8 +525,24 @@ pub fn generate(
 
     // Initial state of the sensor.
     let mut target = RenderTarget::new();
-    stage.render(0.0, &identity, &cam, None, &mut target)?;
+    stage.render(0.0, &identity, &cam, None, &mut target, true)?;
     let eps = config.esim.log_eps;
+    // The props never move and always lie behind the moving meshes: render them once.
+    let mut background = RenderTarget::new();
+    {
+        let scene_props: Vec<BackgroundMesh> = stage
+            .props
+            .iter()
+            .map(|(m, p)| BackgroundMesh { mesh: *m, pose: *p })
+            .collect();
+        let scene = Scene {
+            lighting: Lighting::default(),
+            ..Scene::objects(&[]).with_background(&scene_props)
+        };
+        stage.renderer.render(&scene, &cam, &mut background)?;
+    }
+    let background: Vec<f32> = background.intensity().to_vec();
+    let mut composite: Vec<f32> = Vec::new();
     let mut log0 = Vec::new();
     optics_log(
         target.intensity(),
@@ -519,7 +560,11 @@ pub fn generate(
     let mut log: Vec<f32> = Vec::new();
     let mut depth_target = RenderTarget::new();
     let mut depth_mm: Vec<u16> = Vec::new();
-    let (mut c0, mut c1) = (Vec::new(), Vec::new());
+    let (mut c0, mut c1, mut p0, mut p1) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // The step criterion uses a subsample of vertices; the changing region uses all of them.
+    let n_points = stage.object_points.len() + stage.hand_points.len();
+    let stride = n_points.div_ceil(400).max(1);
+    let mut full0 = !stage.project(0.0, &cam, 1, &mut p0);
     let tick_times: Vec<f64> = edges
         .iter()
         .filter(|e| e.rising)
@@ -533,8 +578,8 @@ pub fn generate(
     let mut region_px_sum = 0.0f64;
     let target_px = config.max_step_px;
     while t_us < t_end_us {
-        // Adaptive step: no projected box corner moves more than max_step_px.
-        let full0 = !stage.corners(t_us * 1e-6, &cam, &mut c0);
+        // Adaptive step: no projected vertex moves more than max_step_px.
+        let sub0 = !stage.project(t_us * 1e-6, &cam, stride, &mut c0);
         while next_tick < tick_times.len() && tick_times[next_tick] <= t_us {
             next_tick += 1;
         }
@@ -546,8 +591,8 @@ pub fn generate(
             .min(t_end_us);
         let mut t1 = (t_us + dt_us).min(horizon);
         for _ in 0..3 {
-            let full1 = !stage.corners(t1 * 1e-6, &cam, &mut c1);
-            let moved = if full0 || full1 || c0.len() != c1.len() {
+            let sub1 = !stage.project(t1 * 1e-6, &cam, stride, &mut c1);
+            let moved = if sub0 || sub1 || c0.len() != c1.len() {
                 f64::INFINITY
             } else {
                 c0.iter()
@@ -567,13 +612,13 @@ pub fn generate(
             t1 = t_us + (step * shrink).max(10.0);
         }
         let step = t1 - t_us;
-        let full1 = !stage.corners(t1 * 1e-6, &cam, &mut c1);
-        // The region that can change: both boxes, plus a margin for shading and bilinear texture support.
+        let full1 = !stage.project(t1 * 1e-6, &cam, 1, &mut p1);
+        // The region that can change: the meshes' extent before and after, plus a margin for the blur.
         let (x0, y0, x1, y1) = if full0 || full1 {
             (0.0, 0.0, f64::from(cam.width), f64::from(cam.height))
         } else {
             let (mut lo_x, mut lo_y, mut hi_x, mut hi_y) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-            for &(u, v) in c0.iter().chain(&c1) {
+            for &(u, v) in p0.iter().chain(&p1) {
                 lo_x = lo_x.min(u);
                 lo_y = lo_y.min(v);
                 hi_x = hi_x.max(u);
@@ -599,9 +644,21 @@ pub fn generate(
             let (ew, eh) = ((ex1 - ex0) as u32, (ey1 - ey0) as u32);
             let roi = Roi::new(ex0, ey0, f64::from(ew), f64::from(eh), ew, eh)
                 .map_err(RenderError::from)?;
-            stage.render(t1 * 1e-6, &identity, &cam, Some(&roi), &mut target)?;
+            stage.render(t1 * 1e-6, &identity, &cam, Some(&roi), &mut target, false)?;
+            composite.clear();
+            for (i, (&v, &m)) in target.intensity().iter().zip(target.mask()).enumerate() {
+                let (x, y) = (
+                    ex0 as usize + i % ew as usize,
+                    ey0 as usize + i / ew as usize,
+                );
+                composite.push(if m == MASK_EMPTY {
+                    background[y * cam.width as usize + x]
+                } else {
+                    v
+                });
+            }
             let inner = ((x0 - ex0) as u32, (y0 - ey0) as u32);
-            optics_log(target.intensity(), ew, eh, inner, (w, h), eps, &mut log);
+            optics_log(&composite, ew, eh, inner, (w, h), eps, &mut log);
             sim.update_region(t_us, t1, x0 as u32, y0 as u32, w, h, &log, &mut events);
             report.renders += 1;
             region_px_sum += f64::from(w) * f64::from(h);
@@ -628,6 +685,7 @@ pub fn generate(
                 &rig.depth_camera,
                 None,
                 &mut depth_target,
+                true,
             )?;
             depth_model.measure(
                 depth_target.depth(),
@@ -640,6 +698,8 @@ pub fn generate(
             report.depth_frames += 1;
         }
         progress(t1 * 1e-6);
+        std::mem::swap(&mut p0, &mut p1);
+        full0 = full1;
         // Next step starts from what worked, allowed to grow.
         dt_us = (step * 1.5).clamp(10.0, 4000.0);
         t_us = t1;
