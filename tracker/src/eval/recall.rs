@@ -34,17 +34,18 @@ pub fn auc(errors: &[f64], max_threshold: f64) -> f64 {
         .map(|e| if e.is_nan() { f64::INFINITY } else { *e })
         .collect();
     sorted.sort_by(f64::total_cmp);
-    let n = sorted.len() as f64;
-    let acc = |x: f64| sorted.partition_point(|e| *e <= x) as f64 / n;
-    let step = max_threshold / AUC_STEPS as f64;
-    let mut area = 0.0;
-    let mut prev = acc(0.0);
+    // Trapezoid rule in integer counts (exact): sum over intervals of (count_i + count_{i+1}).
+    let count = |i: usize| {
+        sorted.partition_point(|e| *e <= max_threshold * i as f64 / AUC_STEPS as f64) as u64
+    };
+    let mut total = 0u64;
+    let mut prev = count(0);
     for i in 1..=AUC_STEPS {
-        let y = acc(i as f64 * step);
-        area += 0.5 * (prev + y) * step;
-        prev = y;
+        let c = count(i);
+        total += prev + c;
+        prev = c;
     }
-    100.0 * area / max_threshold
+    100.0 * total as f64 / (2 * AUC_STEPS * sorted.len()) as f64
 }
 
 /// BOP 2019 correctness thresholds shared by VSD (on its error) and MSSD (times the diameter): 0.05 to 0.5 in

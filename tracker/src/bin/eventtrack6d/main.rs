@@ -1,6 +1,8 @@
 //! `eventtrack6d`: the EventTrack6D command-line tool.
 
+mod bench;
 mod convert;
+mod eval;
 mod inspect;
 mod progress;
 
@@ -19,6 +21,8 @@ struct Cli {
 enum Command {
     Inspect(inspect::InspectArgs),
     Convert(convert::ConvertArgs),
+    Eval(eval::EvalArgs),
+    Bench(bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -26,6 +30,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Inspect(args) => inspect::run(&args),
         Command::Convert(args) => convert::run(&args),
+        Command::Eval(args) => eval::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

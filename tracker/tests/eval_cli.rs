@@ -1,0 +1,157 @@
+//! `eventtrack6d eval` and `bench` refuse bad input with a clear error naming it, never a panic.
+
+use std::path::Path;
+use std::process::Command;
+
+fn fails_with(args: &[&str], needle: &str) {
+    let out = Command::new(env!("CARGO_BIN_EXE_eventtrack6d"))
+        .args(args)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{args:?} succeeded");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    assert!(
+        stderr.contains(needle),
+        "{args:?}: expected `{needle}` in: {stderr}"
+    );
+}
+
+#[test]
+fn eval_bad_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let missing = d.join("missing.csv");
+    fails_with(
+        &[
+            "eval",
+            "--pred",
+            missing.to_str().unwrap(),
+            "--gt",
+            d.to_str().unwrap(),
+        ],
+        "cannot read predictions",
+    );
+    let bad = d.join("bad.csv");
+    std::fs::write(&bad, "t,x\n").unwrap();
+    fails_with(
+        &[
+            "eval",
+            "--pred",
+            bad.to_str().unwrap(),
+            "--gt",
+            d.to_str().unwrap(),
+        ],
+        "pose CSV line 1: expected header",
+    );
+    let bad_row = d.join("row.csv");
+    std::fs::write(
+        &bad_row,
+        "t_us,object,x,y,z,qx,qy,qz,qw,quality,state\n0,can,0,0,nan,0,0,0,1,1,tracking\n",
+    )
+    .unwrap();
+    fails_with(
+        &[
+            "eval",
+            "--pred",
+            bad_row.to_str().unwrap(),
+            "--gt",
+            d.to_str().unwrap(),
+        ],
+        "line 2: z `nan` is not a finite number",
+    );
+    let good = d.join("good.csv");
+    std::fs::write(
+        &good,
+        "t_us,object,x,y,z,qx,qy,qz,qw,quality,state\n0,can,0,0,0.5,0,0,0,1,1,tracking\n",
+    )
+    .unwrap();
+    let no_rec = d.join("no-recording");
+    fails_with(
+        &[
+            "eval",
+            "--pred",
+            good.to_str().unwrap(),
+            "--gt",
+            no_rec.to_str().unwrap(),
+        ],
+        "no-recording",
+    );
+}
+
+#[test]
+fn bench_bad_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let out = out.to_str().unwrap();
+    fails_with(
+        &[
+            "bench",
+            "--suite",
+            "smoke",
+            "--methods",
+            "static,magic",
+            "--out",
+            out,
+        ],
+        "unknown method `magic`",
+    );
+    fails_with(
+        &[
+            "bench",
+            "--suite",
+            "smoke",
+            "--methods",
+            "gt-noise:a:1",
+            "--out",
+            out,
+        ],
+        "translation noise (mm) `a`",
+    );
+    let nowhere = Path::new("does/not/exist");
+    fails_with(
+        &[
+            "bench",
+            "--suite",
+            nowhere.to_str().unwrap(),
+            "--methods",
+            "static",
+            "--out",
+            out,
+        ],
+        "does not exist",
+    );
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    fails_with(
+        &[
+            "bench",
+            "--suite",
+            empty.to_str().unwrap(),
+            "--methods",
+            "static",
+            "--out",
+            out,
+        ],
+        "no recordings",
+    );
+    let broken = dir.path().join("broken");
+    std::fs::create_dir(&broken).unwrap();
+    std::fs::write(
+        broken.join("suite.json"),
+        "{\"sequences\": [{\"name\": 3}]}",
+    )
+    .unwrap();
+    fails_with(
+        &[
+            "bench",
+            "--suite",
+            broken.to_str().unwrap(),
+            "--methods",
+            "static",
+            "--out",
+            out,
+        ],
+        "sequences[0] has no string `name`",
+    );
+}
