@@ -191,3 +191,30 @@ fn independent_evt3_reader_counts_the_same_events() {
         "[count, ON count, sum x, sum y, sum t] from evlib vs ours"
     );
 }
+
+#[test]
+fn a_user_obj_with_material_and_texture_is_copied_into_the_recording() {
+    let src = tempfile::tempdir().unwrap();
+    let files =
+        hil_sim::objects::write_object(&hil_sim::objects::generate(ObjectKind::Can, 3), src.path())
+            .unwrap();
+    // A user's file name with characters that are not file-name safe for the object name.
+    let user = src.path().join("my can.obj");
+    std::fs::rename(&files.obj, &user).unwrap();
+    let out = tempfile::tempdir().unwrap();
+    let mut cfg = config(0.02);
+    cfg.object = ObjectSource::File(user);
+    generate(&cfg, out.path(), |_| {}).unwrap();
+    let rec = Recording::open(out.path()).unwrap();
+    assert_eq!(rec.models.len(), 1);
+    assert_eq!(rec.models[0].name, "my_can");
+    assert!(
+        rec.models[0].symmetries_continuous.is_empty(),
+        "nothing is assumed about a user mesh"
+    );
+    for f in ["my_can.obj", "can.mtl", "can.png"] {
+        assert!(out.path().join("models").join(f).is_file(), "{f} copied");
+    }
+    let loaded = tracker::mesh::load_obj(&rec.mesh_path("my_can"), &Default::default()).unwrap();
+    assert!((loaded.mesh.diameter() - rec.models[0].diameter_m).abs() < 1e-9);
+}
