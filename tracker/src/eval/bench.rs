@@ -191,8 +191,8 @@ pub struct SequenceResult {
     pub sequence: SuiteSequence,
     /// Frame scores of the object.
     pub scores: ObjectSequence,
-    /// Poses the method produced.
-    pub poses: usize,
+    /// The poses the method produced (tracker output rows).
+    pub records: Vec<PoseRecord>,
     /// Seconds the method spent producing them (wall clock).
     pub seconds: f64,
 }
@@ -209,7 +209,7 @@ pub struct MethodResults {
 impl MethodResults {
     /// Poses per second of method run time over every sequence (infinite when it took no measurable time).
     pub fn update_hz(&self) -> f64 {
-        let poses: usize = self.sequences.iter().map(|s| s.poses).sum();
+        let poses: usize = self.sequences.iter().map(|s| s.records.len()).sum();
         let secs: f64 = self.sequences.iter().map(|s| s.seconds).sum();
         if secs > 0.0 {
             poses as f64 / secs
@@ -285,7 +285,7 @@ pub fn run_sequence(
         out.push(SequenceResult {
             sequence: sequence.clone(),
             scores,
-            poses: poses.len(),
+            records: poses,
             seconds,
         });
     }

@@ -9,10 +9,12 @@ use tracker::eval::bench::{
     MethodResults, SuiteSequence, method_from_spec, open_sequence, results_json, results_markdown,
     run_sequence,
 };
+use tracker::eval::format_pose_csv;
 use tracker::eval::plot::line_plot;
 
 /// Run methods over every sequence of a suite with only the first pose given (no re-initialisation), evaluate
-/// them, and write DIR/results.md, DIR/results.json and DIR/plots/<sequence>.png.
+/// them, and write DIR/results.md, DIR/results.json, DIR/plots/<sequence>.png and the poses as
+/// DIR/poses/<method>/<sequence>.csv.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// Suite: a name `hil-sim suite` knows (`dev`, `smoke`; generated or reused under --suites-dir) or a directory
@@ -176,6 +178,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             r.sequences.extend(res);
         }
         plot_sequence(&args.out, seq, &results)?;
+        write_poses(&args.out, seq, &results)?;
     }
     let mut md = results_markdown(&suite_name, &results);
     md.push_str(&plot_legend(&results));
@@ -187,6 +190,26 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         .with_context(|| format!("cannot write {}", json_path.display()))?;
     println!("{md}");
     println!("wrote {} and {}", md_path.display(), json_path.display());
+    Ok(())
+}
+
+/// Writes each method's poses on `seq` as tracker output CSV: `DIR/poses/<method>/<sequence>.csv` (`:` in a
+/// method name becomes `_`).
+fn write_poses(out: &Path, seq: &SuiteSequence, results: &[MethodResults]) -> Result<()> {
+    for r in results {
+        let dir = out.join("poses").join(r.name.replace([':', '/'], "_"));
+        std::fs::create_dir_all(&dir)
+            .with_context(|| format!("cannot create {}", dir.display()))?;
+        let rows: Vec<_> = r
+            .sequences
+            .iter()
+            .filter(|s| s.sequence.name == seq.name)
+            .flat_map(|s| s.records.iter().cloned())
+            .collect();
+        let path = dir.join(format!("{}.csv", seq.name));
+        std::fs::write(&path, format_pose_csv(&rows))
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
     Ok(())
 }
 
