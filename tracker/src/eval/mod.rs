@@ -11,6 +11,7 @@ pub mod plot;
 mod pose_csv;
 mod pose_error;
 mod recall;
+pub mod report;
 mod sequence;
 mod symmetry;
 mod vsd;
