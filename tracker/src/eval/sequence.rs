@@ -305,3 +305,37 @@ impl ObjectSequence {
         summarise(&frames, self.diameter, limit)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn held_and_interpolated_poses() {
+        let a = Isometry3::translation(0.0, 0.0, 1.0);
+        let b = Isometry3::translation(0.1, 0.0, 1.0);
+        // Out of order with a duplicate time: the later row for t = 100 wins.
+        let track = PoseTrack::new(vec![
+            (100, Isometry3::translation(9.0, 9.0, 9.0)),
+            (0, a),
+            (100, b),
+        ]);
+        assert!(track.held_at(-1).is_none());
+        assert_eq!(track.held_at(0), Some(a));
+        assert_eq!(track.held_at(99), Some(a));
+        assert_eq!(track.held_at(1000), Some(b));
+        let mid = track.interpolated_at(25).unwrap();
+        assert!((mid.translation.vector - Vector3::new(0.025, 0.0, 1.0)).norm() < 1e-12);
+        assert_eq!(track.interpolated_at(100), Some(b));
+        assert!(track.interpolated_at(101).is_none());
+        assert!(track.interpolated_at(-1).is_none());
+        assert_eq!(track.first().map(|f| f.0), Some(0));
+    }
+
+    #[test]
+    fn summary_of_no_frames_is_zero() {
+        let s = summarise(&[], 0.1, AucLimit::Diameter);
+        assert_eq!((s.add_s, s.add, s.ar, s.frames), (0.0, 0.0, 0.0, 0));
+    }
+}
