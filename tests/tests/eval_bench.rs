@@ -63,7 +63,7 @@ fn bench_methods_on_a_short_recording() {
     assert!(small.add_s >= small.add && large.add_s >= large.add);
 
     // Report shapes.
-    let doc = results_json("test", &[stat.clone(), exact.clone()]);
+    let doc = results_json("test", &[stat.clone(), exact.clone()], AucLimit::Diameter);
     let m = &doc["methods"]["gt-noise:0:0"];
     assert_eq!(m["mean"]["ar"].as_f64(), Some(100.0));
     assert!(m["mean_30hz"]["add_s"].is_number() && m["update_hz"].is_number());
@@ -71,7 +71,7 @@ fn bench_methods_on_a_short_recording() {
     assert_eq!(sq["object"], "can");
     assert_eq!(sq["motion"], "shake");
     assert_eq!(sq["speed"], "moderate");
-    let md = results_markdown("test", &[stat, exact]);
+    let md = results_markdown("test", &[stat, exact], AucLimit::Metres);
     assert!(
         md.contains("| can |") && md.contains("| **MEAN** |") && md.contains("update rate (Hz)")
     );

@@ -17,6 +17,14 @@ impl AucLimit {
             AucLimit::Metres => 0.1,
         }
     }
+
+    /// How reports name the convention: `0.1 x diameter` or `0.1 m`.
+    pub fn describe(self) -> &'static str {
+        match self {
+            AucLimit::Diameter => "0.1 x diameter",
+            AucLimit::Metres => "0.1 m",
+        }
+    }
 }
 
 /// Number of threshold intervals of the AUC curve (the YCB-Video code's 1 mm step over 0.1 m: 100 intervals).

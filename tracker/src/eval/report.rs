@@ -16,9 +16,8 @@ fn finite_or_null(x: f64) -> Value {
 }
 
 /// The `results.json` document: per method the object-mean at 120 Hz and 30 Hz, the update rate, per-object and
-/// per-sequence summaries (AUC and AR in percent, 0-100; AUC thresholds to 0.1 x diameter).
-pub fn results_json(suite: &str, results: &[MethodResults]) -> Value {
-    let limit = AucLimit::Diameter;
+/// per-sequence summaries (AUC and AR in percent, 0-100; AUC thresholds up to `limit`).
+pub fn results_json(suite: &str, results: &[MethodResults], limit: AucLimit) -> Value {
     let mut methods = Map::new();
     for m in results {
         let mut seqs = Map::new();
@@ -62,7 +61,7 @@ pub fn results_json(suite: &str, results: &[MethodResults]) -> Value {
             }),
         );
     }
-    json!({"suite": suite, "auc_threshold": "0.1 x diameter", "methods": methods})
+    json!({"suite": suite, "auc_threshold": limit.describe(), "methods": methods})
 }
 
 fn cells(s: Option<&Summary>) -> String {
@@ -72,8 +71,13 @@ fn cells(s: Option<&Summary>) -> String {
     }
 }
 
-fn table(out: &mut String, results: &[MethodResults], depth_only: bool, with_rate: bool) {
-    let limit = AucLimit::Diameter;
+fn table(
+    out: &mut String,
+    results: &[MethodResults],
+    depth_only: bool,
+    with_rate: bool,
+    limit: AucLimit,
+) {
     let per: Vec<BTreeMap<String, Summary>> = results
         .iter()
         .map(|m| m.per_object(depth_only, limit))
@@ -118,15 +122,16 @@ fn table(out: &mut String, results: &[MethodResults], depth_only: bool, with_rat
 
 /// The `results.md` report: per-object tables (rows = objects, columns = ADD-S / ADD / AR per method) at 120 Hz
 /// (every tick, with the update rate) and at 30 Hz (depth-exposure ticks), then a per-sequence table.
-pub fn results_markdown(suite: &str, results: &[MethodResults]) -> String {
+pub fn results_markdown(suite: &str, results: &[MethodResults], limit: AucLimit) -> String {
     let mut s = format!(
-        "# Benchmark `{suite}`\n\nAUC of ADD-S and ADD (thresholds 0 to 0.1 x object diameter) and BOP AR \
+        "# Benchmark `{suite}`\n\nAUC of ADD-S and ADD (thresholds 0 to {}) and BOP AR \
          (mean of VSD, MSSD, MSPD recalls, per frame), in percent. Protocol: first pose from ground truth, no \
-         re-initialisation. Update rate = poses per second of method run time.\n\n## 120 Hz (every tick)\n\n"
+         re-initialisation. Update rate = poses per second of method run time.\n\n## 120 Hz (every tick)\n\n",
+        limit.describe()
     );
-    table(&mut s, results, false, true);
+    table(&mut s, results, false, true, limit);
     s.push_str("\n## 30 Hz (depth-exposure ticks only)\n\n");
-    table(&mut s, results, true, false);
+    table(&mut s, results, true, false, limit);
     s.push_str("\n## Per sequence (120 Hz)\n\n| sequence | object | motion | speed |");
     for m in results {
         let _ = write!(s, " {0} ADD-S | {0} ADD | {0} AR |", m.name);
@@ -144,10 +149,7 @@ pub fn results_markdown(suite: &str, results: &[MethodResults]) -> String {
                 r.sequence.name, r.scores.object, r.sequence.motion, r.sequence.speed
             );
             for m in results {
-                let cell = m
-                    .sequences
-                    .get(i)
-                    .map(|x| x.scores.summary(false, AucLimit::Diameter));
+                let cell = m.sequences.get(i).map(|x| x.scores.summary(false, limit));
                 s.push_str(&cells(cell.as_ref()));
             }
             s.push('\n');

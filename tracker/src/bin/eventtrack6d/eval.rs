@@ -20,6 +20,16 @@ pub enum AucArg {
     Metres,
 }
 
+impl AucArg {
+    /// The metric's threshold convention.
+    pub fn limit(self) -> AucLimit {
+        match self {
+            AucArg::Diameter => AucLimit::Diameter,
+            AucArg::Metres => AucLimit::Metres,
+        }
+    }
+}
+
 /// Score a tracker pose CSV (`t_us,object,x,y,z,qx,qy,qz,qw,quality,state`) against a recording's ground truth:
 /// per object AUC of ADD-S and ADD and BOP AR (percent), at every 120 Hz tick and at depth-exposure ticks only.
 #[derive(Debug, Args)]
@@ -63,18 +73,12 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         }
     }
     let ticks = recording_ticks(&rec)?;
-    let limit = match args.auc {
-        AucArg::Diameter => AucLimit::Diameter,
-        AucArg::Metres => AucLimit::Metres,
-    };
+    let limit = args.auc.limit();
     println!(
         "{} ticks ({} depth exposures); AUC thresholds to {}; values in percent",
         ticks.len(),
         ticks.iter().filter(|t| t.depth_frame.is_some()).count(),
-        match limit {
-            AucLimit::Diameter => "0.1 x diameter",
-            AucLimit::Metres => "0.1 m",
-        }
+        limit.describe()
     );
     println!(
         "{:<16} {:>8} {:>8} {:>8} | {:>8} {:>8} {:>8}",
@@ -142,7 +146,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         let doc = json!({
             "recording": args.gt.display().to_string(),
             "predictions": args.pred.display().to_string(),
-            "auc_threshold": match limit { AucLimit::Diameter => "0.1 x diameter", AucLimit::Metres => "0.1 m" },
+            "auc_threshold": limit.describe(),
             "objects": per_object,
             "mean": {"add_s": sum120[0] / n, "add": sum120[1] / n, "ar": sum120[2] / n},
             "mean_30hz": {"add_s": sum30[0] / n, "add": sum30[1] / n, "ar": sum30[2] / n},
