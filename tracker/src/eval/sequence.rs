@@ -33,6 +33,14 @@ pub enum EvalError {
         /// What is wrong.
         reason: String,
     },
+    /// A camera of the recording has unusable intrinsics.
+    #[error("{camera} intrinsics: {reason}")]
+    Camera {
+        /// Which camera (`event camera`, `depth camera`).
+        camera: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
     /// Declared symmetries are invalid.
     #[error(transparent)]
     Symmetry(#[from] SymmetryError),
@@ -153,10 +161,10 @@ impl PoseTrack {
     }
 }
 
-fn camera_of(c: &CameraIntrinsics, object: &str) -> Result<PinholeCamera, EvalError> {
-    PinholeCamera::new(c.fx, c.fy, c.cx, c.cy, c.width, c.height).map_err(|e| EvalError::Model {
-        object: object.into(),
-        reason: format!("camera: {e}"),
+fn camera_of(c: &CameraIntrinsics, camera: &'static str) -> Result<PinholeCamera, EvalError> {
+    PinholeCamera::new(c.fx, c.fy, c.cx, c.cy, c.width, c.height).map_err(|e| EvalError::Camera {
+        camera,
+        reason: e.to_string(),
     })
 }
 
