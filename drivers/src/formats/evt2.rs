@@ -5,7 +5,7 @@
 //! in 27..22), `0xE` OTHERS, `0xF` CONTINUED. The 34-bit time wraps every ~4.8 hours; a TIME_HIGH smaller than
 //! the previous one by at least half its range is a wrap.
 
-use super::{EncodeError, Record, merge_by_time};
+use super::{EncodeError, Record, TimeHighSteps, WordAssembler, merge_by_time};
 use crate::anomaly::{AnomalyKind, DecodeAnomalies};
 use crate::event::{CdEvent, EventSink, Geometry, TriggerEdge};
 
@@ -22,8 +22,7 @@ const HIGH_MASK: u32 = 0x0FFF_FFFF;
 pub struct Evt2Decoder {
     limit_x: u16,
     limit_y: u16,
-    partial: [u8; 4],
-    partial_len: usize,
+    words: WordAssembler<4>,
     synced: bool,
     loop_base: i64,
     time_high: u32,
@@ -39,8 +38,7 @@ impl Evt2Decoder {
         Self {
             limit_x,
             limit_y,
-            partial: [0; 4],
-            partial_len: 0,
+            words: WordAssembler::default(),
             synced: false,
             loop_base: 0,
             time_high: 0,
@@ -56,32 +54,14 @@ impl Evt2Decoder {
 
     /// Decodes the next chunk of the stream.
     pub fn decode<S: EventSink>(&mut self, bytes: &[u8], sink: &mut S) {
-        let mut bytes = bytes;
-        if self.partial_len > 0 {
-            let need = 4 - self.partial_len;
-            let take = need.min(bytes.len());
-            self.partial[self.partial_len..self.partial_len + take].copy_from_slice(&bytes[..take]);
-            self.partial_len += take;
-            bytes = &bytes[take..];
-            if self.partial_len < 4 {
-                return;
-            }
-            self.partial_len = 0;
-            self.word(u32::from_le_bytes(self.partial), sink);
-        }
-        let mut words = bytes.chunks_exact(4);
-        for w in &mut words {
-            self.word(u32::from_le_bytes([w[0], w[1], w[2], w[3]]), sink);
-        }
-        let rest = words.remainder();
-        self.partial[..rest.len()].copy_from_slice(rest);
-        self.partial_len = rest.len();
+        let mut words = std::mem::take(&mut self.words);
+        words.feed(bytes, |w| self.word(u32::from_le_bytes(w), sink));
+        self.words = words;
     }
 
     /// Ends the stream: a trailing partial word is counted as [`AnomalyKind::TruncatedWord`].
     pub fn finish(&mut self) {
-        if self.partial_len > 0 {
-            self.partial_len = 0;
+        if self.words.finish() {
             self.anomalies.add(AnomalyKind::TruncatedWord, 1);
         }
     }
@@ -147,11 +127,17 @@ impl Evt2Decoder {
 }
 
 /// EVT 2.0 encoder. Invariant: the decoder applied to the output yields exactly the input records.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Evt2Encoder {
-    /// Absolute time-high count (`t >> 6`) last emitted.
-    high: Option<i64>,
-    last_t: i64,
+    time: TimeHighSteps,
+}
+
+impl Default for Evt2Encoder {
+    fn default() -> Self {
+        Self {
+            time: TimeHighSteps::new(6, i64::from(HIGH_MASK) + 1),
+        }
+    }
 }
 
 impl Evt2Encoder {
@@ -206,42 +192,13 @@ impl Evt2Encoder {
     }
 
     fn set_time(&mut self, t: i64, out: &mut Vec<u8>) -> Result<(), EncodeError> {
-        if t < 0 {
-            return Err(EncodeError::NegativeTime { t_us: t });
-        }
-        let target = t >> 6;
-        let range = i64::from(HIGH_MASK) + 1;
-        match self.high {
-            Some(h) if target < h => {
-                return Err(EncodeError::TimeWentBack {
-                    from_us: self.last_t,
-                    to_us: t,
-                });
-            }
-            Some(h) if target == h => {}
-            _ => {
-                let mut cur = match self.high {
-                    Some(h) => h,
-                    None => {
-                        let first = target.min(range - 1);
-                        push_high(out, first);
-                        first
-                    }
-                };
-                while cur < target {
-                    cur = (cur + (range / 2 - 1)).min(target);
-                    push_high(out, cur);
-                }
-                self.high = Some(target);
-            }
-        }
-        self.last_t = t;
+        self.time.advance(t, |high| push_high(out, high))?;
         Ok(())
     }
 }
 
-fn push_high(out: &mut Vec<u8>, abs_high: i64) {
-    let w = (TIME_HIGH << 28) | (abs_high as u32 & HIGH_MASK);
+fn push_high(out: &mut Vec<u8>, high: i64) {
+    let w = (TIME_HIGH << 28) | (high as u32 & HIGH_MASK);
     out.extend_from_slice(&w.to_le_bytes());
 }
 

@@ -7,7 +7,7 @@
 //! half little-endian; `.raw` format string `EVT21;...;endianness=legacy`); [`WordOrder::Little`] is one
 //! little-endian 64-bit word (GenX320).
 
-use super::{EncodeError, Record, merge_by_time};
+use super::{EncodeError, Record, TimeHighSteps, WordAssembler, merge_by_time};
 use crate::anomaly::{AnomalyKind, DecodeAnomalies};
 use crate::event::{CdEvent, EventSink, Geometry, TriggerEdge};
 
@@ -61,8 +61,7 @@ pub struct Evt21Decoder {
     order: WordOrder,
     limit_x: u32,
     limit_y: u16,
-    partial: [u8; 8],
-    partial_len: usize,
+    words: WordAssembler<8>,
     synced: bool,
     loop_base: i64,
     time_high: u64,
@@ -78,8 +77,7 @@ impl Evt21Decoder {
             order,
             limit_x,
             limit_y,
-            partial: [0; 8],
-            partial_len: 0,
+            words: WordAssembler::default(),
             synced: false,
             loop_base: 0,
             time_high: 0,
@@ -95,33 +93,15 @@ impl Evt21Decoder {
 
     /// Decodes the next chunk of the stream.
     pub fn decode<S: EventSink>(&mut self, bytes: &[u8], sink: &mut S) {
-        let mut bytes = bytes;
-        if self.partial_len > 0 {
-            let take = (8 - self.partial_len).min(bytes.len());
-            self.partial[self.partial_len..self.partial_len + take].copy_from_slice(&bytes[..take]);
-            self.partial_len += take;
-            bytes = &bytes[take..];
-            if self.partial_len < 8 {
-                return;
-            }
-            self.partial_len = 0;
-            let w = self.order.read(&self.partial);
-            self.word(w, sink);
-        }
-        let mut words = bytes.chunks_exact(8);
-        for w in &mut words {
-            let w = self.order.read(w);
-            self.word(w, sink);
-        }
-        let rest = words.remainder();
-        self.partial[..rest.len()].copy_from_slice(rest);
-        self.partial_len = rest.len();
+        let mut words = std::mem::take(&mut self.words);
+        let order = self.order;
+        words.feed(bytes, |w| self.word(order.read(&w), sink));
+        self.words = words;
     }
 
     /// Ends the stream: a trailing partial word is counted as [`AnomalyKind::TruncatedWord`].
     pub fn finish(&mut self) {
-        if self.partial_len > 0 {
-            self.partial_len = 0;
+        if self.words.finish() {
             self.anomalies.add(AnomalyKind::TruncatedWord, 1);
         }
     }
@@ -200,11 +180,10 @@ impl Evt21Decoder {
 
 /// EVT 2.1 encoder: consecutive events sharing time, row and polarity with increasing columns inside one
 /// 32-aligned block become one vector word. Invariant: decoding the output yields the input records.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Evt21Encoder {
     order: WordOrder,
-    high: Option<i64>,
-    last_t: i64,
+    time: TimeHighSteps,
 }
 
 impl Evt21Encoder {
@@ -212,8 +191,7 @@ impl Evt21Encoder {
     pub fn new(order: WordOrder) -> Self {
         Self {
             order,
-            high: None,
-            last_t: 0,
+            time: TimeHighSteps::new(6, (HIGH_MASK + 1) as i64),
         }
     }
 
@@ -286,44 +264,11 @@ impl Evt21Encoder {
     }
 
     fn set_time(&mut self, t: i64, out: &mut Vec<u8>) -> Result<(), EncodeError> {
-        if t < 0 {
-            return Err(EncodeError::NegativeTime { t_us: t });
-        }
-        let target = t >> 6;
-        let range = (HIGH_MASK + 1) as i64;
-        match self.high {
-            Some(h) if target < h => {
-                return Err(EncodeError::TimeWentBack {
-                    from_us: self.last_t,
-                    to_us: t,
-                });
-            }
-            Some(h) if target == h => {}
-            _ => {
-                let mut cur = match self.high {
-                    Some(h) => h,
-                    None => {
-                        let first = target.min(range - 1);
-                        self.push_high(first, out);
-                        first
-                    }
-                };
-                while cur < target {
-                    cur = (cur + (range / 2 - 1)).min(target);
-                    self.push_high(cur, out);
-                }
-                self.high = Some(target);
-            }
-        }
-        self.last_t = t;
+        let order = self.order;
+        self.time.advance(t, |high| {
+            order.write((TIME_HIGH << 60) | ((high as u64 & HIGH_MASK) << 32), out)
+        })?;
         Ok(())
-    }
-
-    fn push_high(&self, abs_high: i64, out: &mut Vec<u8>) {
-        self.order.write(
-            (TIME_HIGH << 60) | ((abs_high as u64 & HIGH_MASK) << 32),
-            out,
-        );
     }
 }
 

@@ -6,7 +6,7 @@
 //! at least 2048 is a wrap of the 24-bit base. A TIME_LOW smaller than the previous one without a new
 //! TIME_HIGH is a small step back in time (the sensor's readout is not strictly ordered), not a wrap.
 
-use super::{EncodeError, Record, merge_by_time};
+use super::{EncodeError, Record, TimeHighSteps, WordAssembler, merge_by_time};
 use crate::anomaly::{AnomalyKind, DecodeAnomalies};
 use crate::event::{CdEvent, EventSink, Geometry, TriggerEdge};
 
@@ -39,7 +39,7 @@ enum Sync {
 pub struct Evt3Decoder {
     limit_x: u32,
     limit_y: u16,
-    leftover: Option<u8>,
+    words: WordAssembler<2>,
     sync: Sync,
     /// `loop << 24` in microseconds.
     loop_base: i64,
@@ -62,7 +62,7 @@ impl Evt3Decoder {
         Self {
             limit_x,
             limit_y,
-            leftover: None,
+            words: WordAssembler::default(),
             sync: Sync::WaitTime,
             loop_base: 0,
             time_high: 0,
@@ -89,31 +89,14 @@ impl Evt3Decoder {
 
     /// Decodes the next chunk of the stream.
     pub fn decode<S: EventSink>(&mut self, bytes: &[u8], sink: &mut S) {
-        let mut bytes = bytes;
-        if let Some(lo) = self.leftover.take() {
-            match bytes.split_first() {
-                Some((&hi, rest)) => {
-                    self.word(u16::from_le_bytes([lo, hi]), sink);
-                    bytes = rest;
-                }
-                None => {
-                    self.leftover = Some(lo);
-                    return;
-                }
-            }
-        }
-        let mut words = bytes.chunks_exact(2);
-        for w in &mut words {
-            self.word(u16::from_le_bytes([w[0], w[1]]), sink);
-        }
-        if let [last] = words.remainder() {
-            self.leftover = Some(*last);
-        }
+        let mut words = std::mem::take(&mut self.words);
+        words.feed(bytes, |w| self.word(u16::from_le_bytes(w), sink));
+        self.words = words;
     }
 
     /// Ends the stream: a trailing half word is counted as [`AnomalyKind::TruncatedWord`].
     pub fn finish(&mut self) {
-        if self.leftover.take().is_some() {
+        if self.words.finish() {
             self.anomalies.add(AnomalyKind::TruncatedWord, 1);
         }
     }
@@ -263,13 +246,21 @@ impl Evt3Decoder {
 /// a row, time and polarity with increasing columns; ADDR_X for lone events; EXT_TRIGGER words for triggers.
 ///
 /// Invariant: the decoder applied to the output yields exactly the input records, whatever the chunking.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Evt3Encoder {
-    /// Absolute time-high count (`t >> 12`) last emitted.
-    high: Option<i64>,
+    time: TimeHighSteps,
     low: Option<u16>,
-    last_t: i64,
     y: Option<u16>,
+}
+
+impl Default for Evt3Encoder {
+    fn default() -> Self {
+        Self {
+            time: TimeHighSteps::new(12, 1 << 12),
+            low: None,
+            y: None,
+        }
+    }
 }
 
 impl Evt3Encoder {
@@ -383,43 +374,17 @@ impl Evt3Encoder {
     }
 
     fn set_time(&mut self, t: i64, out: &mut Vec<u8>) -> Result<(), EncodeError> {
-        if t < 0 {
-            return Err(EncodeError::NegativeTime { t_us: t });
+        if self
+            .time
+            .advance(t, |high| push(out, (TIME_HIGH << 12) | high as u16))?
+        {
+            self.low = None;
         }
-        let target = t >> 12;
         let low = (t & 0x0FFF) as u16;
-        match self.high {
-            Some(h) if target < h => {
-                return Err(EncodeError::TimeWentBack {
-                    from_us: self.last_t,
-                    to_us: t,
-                });
-            }
-            Some(h) if target == h => {}
-            _ => {
-                let mut cur = match self.high {
-                    Some(h) => h,
-                    None => {
-                        // The decoder starts its loop count at zero on the first TIME_HIGH.
-                        let first = target.min(0x0FFF);
-                        push(out, (TIME_HIGH << 12) | first as u16);
-                        first
-                    }
-                };
-                // Steps of less than 2048 keep every wrap detectable by the decoder.
-                while cur < target {
-                    cur = (cur + 2047).min(target);
-                    push(out, (TIME_HIGH << 12) | (cur & 0x0FFF) as u16);
-                }
-                self.high = Some(target);
-                self.low = None;
-            }
-        }
         if self.low != Some(low) {
             push(out, (TIME_LOW << 12) | low);
             self.low = Some(low);
         }
-        self.last_t = t;
         Ok(())
     }
 }

@@ -86,3 +86,119 @@ pub(crate) enum Record<'a> {
     Cd(&'a [crate::event::CdEvent]),
     Trigger(&'a crate::event::TriggerEdge),
 }
+
+/// Reassembles fixed-size words from byte chunks split anywhere (USB transfers cut words and word groups).
+#[derive(Debug, Clone)]
+pub(crate) struct WordAssembler<const N: usize> {
+    partial: [u8; N],
+    len: usize,
+}
+
+impl<const N: usize> Default for WordAssembler<N> {
+    fn default() -> Self {
+        Self {
+            partial: [0; N],
+            len: 0,
+        }
+    }
+}
+
+impl<const N: usize> WordAssembler<N> {
+    /// Calls `word` with every complete word of `bytes` (after any bytes held back from the previous chunk), in
+    /// stream order, and holds back a trailing partial word.
+    #[inline(always)]
+    pub(crate) fn feed(&mut self, bytes: &[u8], mut word: impl FnMut([u8; N])) {
+        let mut bytes = bytes;
+        if self.len > 0 {
+            let take = (N - self.len).min(bytes.len());
+            self.partial[self.len..self.len + take].copy_from_slice(&bytes[..take]);
+            self.len += take;
+            bytes = &bytes[take..];
+            if self.len < N {
+                return;
+            }
+            self.len = 0;
+            word(self.partial);
+        }
+        let mut words = bytes.chunks_exact(N);
+        for w in &mut words {
+            let mut a = [0u8; N];
+            a.copy_from_slice(w);
+            word(a);
+        }
+        let rest = words.remainder();
+        self.partial[..rest.len()].copy_from_slice(rest);
+        self.len = rest.len();
+    }
+
+    /// Ends the stream: `true` if a partial word was left over (and is dropped).
+    pub(crate) fn finish(&mut self) -> bool {
+        std::mem::take(&mut self.len) > 0
+    }
+}
+
+/// The time-high counter an encoder has emitted, and the TIME_HIGH words needed to reach a new time so that the
+/// decoder's wrap rule (a drop of at least half the counter's range is a wrap) recovers absolute time.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct TimeHighSteps {
+    /// Time bits below the counter (12 for EVT3, 6 for EVT2 / EVT2.1).
+    shift: u32,
+    /// Counter range (2^12 for EVT3, 2^28 for EVT2 / EVT2.1).
+    range: i64,
+    /// Absolute counter value (`t >> shift`) last emitted.
+    high: Option<i64>,
+    last_t: i64,
+}
+
+impl TimeHighSteps {
+    pub(crate) const fn new(shift: u32, range: i64) -> Self {
+        Self {
+            shift,
+            range,
+            high: None,
+            last_t: 0,
+        }
+    }
+
+    /// Moves to time `t`, calling `emit` with each counter value (already masked to the range) to write as a
+    /// TIME_HIGH word. Returns whether the counter changed. Time may not go back across a counter step.
+    pub(crate) fn advance(
+        &mut self,
+        t: i64,
+        mut emit: impl FnMut(i64),
+    ) -> Result<bool, EncodeError> {
+        if t < 0 {
+            return Err(EncodeError::NegativeTime { t_us: t });
+        }
+        let target = t >> self.shift;
+        let changed = match self.high {
+            Some(h) if target < h => {
+                return Err(EncodeError::TimeWentBack {
+                    from_us: self.last_t,
+                    to_us: t,
+                });
+            }
+            Some(h) if target == h => false,
+            _ => {
+                let mut cur = match self.high {
+                    Some(h) => h,
+                    None => {
+                        // The decoder starts its wrap count at zero on the first TIME_HIGH.
+                        let first = target.min(self.range - 1);
+                        emit(first);
+                        first
+                    }
+                };
+                // Steps shorter than half the range keep every wrap detectable.
+                while cur < target {
+                    cur = (cur + self.range / 2 - 1).min(target);
+                    emit(cur & (self.range - 1));
+                }
+                self.high = Some(target);
+                true
+            }
+        };
+        self.last_t = t;
+        Ok(changed)
+    }
+}
