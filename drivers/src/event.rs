@@ -105,7 +105,13 @@ pub struct EventCounter {
 
 impl Default for EventCounter {
     fn default() -> Self {
-        Self { positive: 0, negative: 0, trigger_edges: [[0; 2]; 32], t_min: i64::MAX, t_max: i64::MIN }
+        Self {
+            positive: 0,
+            negative: 0,
+            trigger_edges: [[0; 2]; 32],
+            t_min: i64::MAX,
+            t_max: i64::MIN,
+        }
     }
 }
 
