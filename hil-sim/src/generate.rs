@@ -115,12 +115,12 @@ pub enum GenerateError {
     #[error("rendering failed: {0}")]
     Render(#[from] RenderError),
     /// Copying a user mesh failed.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: PathBuf,
         /// What went wrong.
-        source: std::io::Error,
+        error: std::io::Error,
     },
 }
 
@@ -268,7 +268,7 @@ fn model_info(name: &str, mesh: &Mesh, symmetries: &[Symmetry]) -> ModelInfo {
 fn copy_user_obj(obj: &Path, models: &Path, name: &str) -> Result<(), GenerateError> {
     let io = |path: &Path| {
         let path = path.to_path_buf();
-        move |source| GenerateError::Io { path, source }
+        move |error| GenerateError::Io { path, error }
     };
     let dir = obj.parent().unwrap_or(Path::new("."));
     let text = std::fs::read_to_string(obj).map_err(io(obj))?;

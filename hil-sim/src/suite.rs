@@ -110,7 +110,7 @@ pub fn generate_suite(
     let path = out.join("suite.json");
     let text = serde_json::to_string_pretty(&json!({"suite": name, "sequences": list}))
         .unwrap_or_default();
-    std::fs::write(&path, text).map_err(|source| GenerateError::Io { path, source })?;
+    std::fs::write(&path, text).map_err(|error| GenerateError::Io { path, error })?;
     Ok(dirs)
 }
 

@@ -15,7 +15,7 @@ const MAX_HEADER_BYTES: usize = 1 << 20;
 pub enum HeaderError {
     /// Reading failed.
     #[error("cannot read header: {0}")]
-    Io(#[from] io::Error),
+    Io(io::Error),
     /// The header has neither an `evt` nor a `format` line.
     #[error("header has no `% evt` or `% format` line, so the event format is unknown")]
     NoFormat,
@@ -45,6 +45,12 @@ pub enum HeaderError {
     /// More than [`MAX_HEADER_BYTES`] of `%` lines.
     #[error("header is longer than {MAX_HEADER_BYTES} bytes")]
     TooLong,
+}
+
+impl From<io::Error> for HeaderError {
+    fn from(e: io::Error) -> Self {
+        HeaderError::Io(e)
+    }
 }
 
 /// A parsed `.raw` header.

@@ -16,20 +16,20 @@ pub const CHUNK_BYTES: usize = 128 * 1024;
 #[derive(Debug, Error)]
 pub enum RawFileError {
     /// Opening or reading failed.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file.
         path: PathBuf,
         /// The I/O error.
-        source: io::Error,
+        error: io::Error,
     },
     /// The header is malformed.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Header {
         /// The file.
         path: PathBuf,
         /// What is wrong with the header.
-        source: HeaderError,
+        error: HeaderError,
     },
 }
 
@@ -47,9 +47,9 @@ pub struct RawReader<R: Read> {
 impl RawReader<File> {
     /// Opens `path` and parses its header.
     pub fn open(path: &Path) -> Result<Self, RawFileError> {
-        let file = File::open(path).map_err(|source| RawFileError::Io {
+        let file = File::open(path).map_err(|error| RawFileError::Io {
             path: path.into(),
-            source,
+            error,
         })?;
         Self::new(file, path)
     }
@@ -59,9 +59,9 @@ impl<R: Read> RawReader<R> {
     /// Reads the header from `input`; `path` is only used in error messages.
     pub fn new(input: R, path: &Path) -> Result<Self, RawFileError> {
         let mut input = BufReader::with_capacity(64 * 1024, input);
-        let header = RawHeader::read(&mut input).map_err(|source| RawFileError::Header {
+        let header = RawHeader::read(&mut input).map_err(|error| RawFileError::Header {
             path: path.into(),
-            source,
+            error,
         })?;
         let decoder = AnyDecoder::new(header.format, header.geometry);
         Ok(Self {
@@ -99,10 +99,10 @@ impl<R: Read> RawReader<R> {
             match self.input.read(&mut self.buf) {
                 Ok(n) => break n,
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
-                Err(source) => {
+                Err(error) => {
                     return Err(RawFileError::Io {
                         path: self.path.clone(),
-                        source,
+                        error,
                     });
                 }
             }
