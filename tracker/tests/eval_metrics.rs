@@ -261,3 +261,23 @@ proptest! {
         prop_assert!(add(&est, &gt, &pts) > 0.01);
     }
 }
+
+#[test]
+fn coarse_meshes_get_surface_samples_and_box_add_s_drops_below_add() {
+    let mesh = Arc::new(common::cube(0.1));
+    let model = EvalModel::new("cube", mesh.clone(), mesh.diameter(), &[]);
+    assert_eq!(model.points.len(), tracker::eval::MIN_MODEL_POINTS);
+    assert_eq!(model.points[..24], points(&mesh)[..]);
+    // A 5 mm slide along a face: on the 24 corner vertices alone ADD-S would equal ADD (each corner is nearest its
+    // own image); with surface samples part of the slide is onto the surface itself.
+    let gt = gt_pose();
+    let est = gt * Isometry3::translation(0.005, 0.0, 0.0);
+    let (a, s) = (
+        add(&est, &gt, &model.points),
+        add_s(&est, &gt, &model.points),
+    );
+    assert!((a - 0.005).abs() < 1e-9);
+    assert!(s < 0.9 * a, "ADD-S {s} vs ADD {a}");
+    let corners = points(&mesh);
+    assert!((add_s(&est, &gt, &corners) - add(&est, &gt, &corners)).abs() < 1e-12);
+}

@@ -14,6 +14,10 @@ use std::sync::Arc;
 /// with an even stride to keep evaluation time bounded).
 pub const MAX_MODEL_POINTS: usize = 4000;
 
+/// Coarse meshes (fewer vertices than this) get seeded area-uniform surface samples added to their vertices up
+/// to this count: BOP's models are dense, and on a low-poly mesh a nearest-vertex ADD-S degenerates into ADD.
+pub const MIN_MODEL_POINTS: usize = 1000;
+
 /// An object model prepared for evaluation.
 #[derive(Debug, Clone)]
 pub struct EvalModel {
@@ -21,7 +25,7 @@ pub struct EvalModel {
     pub name: String,
     /// Diameter, metres (from `models_info.json`).
     pub diameter: f64,
-    /// Metric points: mesh vertices, object frame, metres.
+    /// Metric points: mesh vertices (plus surface samples on coarse meshes), object frame, metres.
     pub points: Vec<Point3<f64>>,
     /// Symmetry transforms including identity, object frame (see [`symmetry_transforms`]).
     pub symmetries: Vec<Isometry3<f64>>,
@@ -30,15 +34,20 @@ pub struct EvalModel {
 }
 
 impl EvalModel {
-    /// Prepares `mesh` with the given diameter (metres) and declared symmetries.
+    /// Prepares `mesh` with the given diameter (metres) and declared symmetries; metric points as described at
+    /// [`MAX_MODEL_POINTS`] and [`MIN_MODEL_POINTS`].
     pub fn new(name: &str, mesh: Arc<Mesh>, diameter: f64, symmetries: &[Symmetry]) -> Self {
         let verts = mesh.positions();
         let stride = verts.len().div_ceil(MAX_MODEL_POINTS).max(1);
-        let points = verts
+        let mut points: Vec<Point3<f64>> = verts
             .iter()
             .step_by(stride)
             .map(|p| Point3::new(p.x as f64, p.y as f64, p.z as f64))
             .collect();
+        if points.len() < MIN_MODEL_POINTS {
+            let extra = mesh.sample_surface_seeded(MIN_MODEL_POINTS - points.len(), 0x5eed);
+            points.extend(extra.iter().map(|s| s.position));
+        }
         Self {
             name: name.to_string(),
             diameter,

@@ -17,7 +17,8 @@ mod symmetry;
 mod vsd;
 
 pub use frame::{
-    EvalCameras, EvalModel, FrameEvaluator, FrameScore, MAX_MODEL_POINTS, PoseErrors, score_errors,
+    EvalCameras, EvalModel, FrameEvaluator, FrameScore, MAX_MODEL_POINTS, MIN_MODEL_POINTS,
+    PoseErrors, score_errors,
 };
 pub use kdtree::KdTree;
 pub use pose_csv::{
