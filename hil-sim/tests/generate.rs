@@ -175,9 +175,14 @@ fn independent_evt3_reader_counts_the_same_events() {
         Err(e) => panic!("python3 is needed for the independent EVT3 reader: {e}"),
     };
     let text = String::from_utf8_lossy(&out.stdout);
-    let v: Vec<i64> = text
+    // The figures are the last line (a library may print notices before them).
+    let last = text.lines().last().unwrap_or_default();
+    let v: Vec<i64> = last
         .split_whitespace()
-        .map(|v| v.parse::<i64>().unwrap())
+        .map(|v| {
+            v.parse::<i64>()
+                .unwrap_or_else(|_| panic!("unexpected reader output: {text}"))
+        })
         .collect();
     let ours = [
         events.cd.len() as i64,
