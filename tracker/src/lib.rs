@@ -4,3 +4,5 @@ pub mod eval;
 pub mod geometry;
 pub mod mesh;
 pub mod render;
+pub mod track;
+pub mod publish;

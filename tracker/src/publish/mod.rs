@@ -1,0 +1,59 @@
+//! Where poses go: sinks that the runtime hands every tick's estimates to (zenoh / ROS 2, CAN, files).
+//!
+//! A sink never blocks the caller for long and never panics on a transport failure: failures are counted in
+//! [`SinkCounters`] and reported, and the sink carries on (retrying where the transport allows).
+
+use crate::track::PoseEstimate;
+use drivers::timeline::Tick;
+use std::time::Instant;
+
+/// One tick's output as handed to sinks.
+#[derive(Debug, Clone, Copy)]
+pub struct TickPoses<'a> {
+    /// The tick (index, time on the event camera's clock).
+    pub tick: &'a Tick,
+    /// One estimate per tracked object, in object order.
+    pub estimates: &'a [PoseEstimate],
+    /// Object names; `PoseEstimate::object` indexes this slice.
+    pub objects: &'a [String],
+    /// Wall-clock instant at which the tick's trigger edge was decoded (start of the latency measurement).
+    pub decoded_at: Instant,
+}
+
+/// What a sink has done so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SinkCounters {
+    /// Poses handed to the transport successfully.
+    pub published: u64,
+    /// Poses not delivered because the transport failed (write error, bus-off, closed session).
+    pub failed: u64,
+    /// Poses dropped because the sink's own bounded queue was full.
+    pub dropped: u64,
+}
+
+/// Why a sink could not publish.
+#[derive(Debug, thiserror::Error)]
+pub enum PublishError {
+    /// The transport refused or failed (message names the sink and the cause).
+    #[error("{sink}: {message}")]
+    Transport {
+        /// Sink name, e.g. `zenoh` or `can:vcan0`.
+        sink: String,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+/// A destination for poses.
+pub trait PoseSink: Send {
+    /// Short name for logs and the status topic (e.g. `zenoh`, `can:can0`, `candump:out.log`, `csv:poses.csv`).
+    fn name(&self) -> &str;
+    /// Publishes one tick's estimates. Must return promptly; a failure is counted and returned, never panics.
+    fn publish(&mut self, poses: &TickPoses<'_>) -> Result<(), PublishError>;
+    /// Counters since creation.
+    fn counters(&self) -> SinkCounters;
+    /// Flushes buffered output (files); called at shutdown.
+    fn flush(&mut self) -> Result<(), PublishError> {
+        Ok(())
+    }
+}

@@ -1,0 +1,32 @@
+//! Per-object pose tracking: the interface the runtime drives ([`PoseTracker`]) and what it produces
+//! ([`PoseEstimate`]).
+//!
+//! The runtime feeds a tracker in time order: events (camera clock, microseconds) with timestamps up to a tick,
+//! then the depth frame exposed at that tick (if any), then [`PoseTracker::tick`], which appends one estimate per
+//! tracked object.
+
+mod estimate;
+mod hold;
+
+pub use estimate::{PoseEstimate, TrackingState};
+pub use hold::HoldPoseTracker;
+
+use drivers::event::CdEvent;
+use drivers::recording::DepthFrame;
+use drivers::timeline::Tick;
+
+/// A multi-object pose tracker driven tick by tick. Implementations must not allocate per tick in steady state and
+/// must never block: the runtime calls them from the tracker thread.
+pub trait PoseTracker: Send {
+    /// Names of the tracked objects; [`PoseEstimate::object`] indexes this list.
+    fn objects(&self) -> &[String];
+    /// Events in time order (non-decreasing `t_us`), all at or before the next tick.
+    fn push_events(&mut self, events: &[CdEvent]);
+    /// The depth frame exposed at time `t_us` (the depth-exposure tick), in the depth camera's pixels.
+    fn push_depth(&mut self, t_us: i64, frame: &DepthFrame);
+    /// Estimates every object's pose at `tick` and appends one [`PoseEstimate`] per object to `out`.
+    fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>);
+    /// The pose of object `object` at any time `t_us` (interpolated between ticks, extrapolated at most one tick
+    /// period past the last one); `None` before the first tick or for an unknown object.
+    fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate>;
+}
