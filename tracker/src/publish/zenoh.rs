@@ -1,0 +1,575 @@
+//! The zenoh sink: every object's pose as `geometry_msgs/msg/PoseStamped` on its rmw_zenoh key, so that ROS 2 nodes
+//! using `rmw_zenoh_cpp` receive it unchanged, plus a JSON status key and the liveliness tokens that make the
+//! publishers visible in the ROS 2 graph. Wire formats are in [`super::ros2`]; `docs/zenoh-ros2.md` explains them.
+//!
+//! The sink uses zenoh's synchronous API (`.wait()`), so it is called from a plain thread (zenoh runs its own tokio
+//! runtime inside). A transport failure is counted and returned as [`PublishError`], never a panic.
+
+use super::ros2::{self, Attachment, RosNodeIdentity, RosTime};
+use super::{PoseSink, PublishError, SinkCounters, TickPoses};
+use std::hash::{BuildHasher, Hasher};
+use std::time::{SystemTime, UNIX_EPOCH};
+use zenoh::Wait;
+use zenoh::bytes::Encoding;
+use zenoh::liveliness::LivelinessToken;
+use zenoh::pubsub::Publisher;
+use zenoh::qos::{CongestionControl, Priority};
+
+/// Sink name used in errors, logs and the status topic.
+pub const SINK_NAME: &str = "zenoh";
+
+/// zenoh session mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SessionMode {
+    /// Peer (the default, as ROS 2 nodes under rmw_zenoh): talks to peers and routers it connects to.
+    #[default]
+    Peer,
+    /// Client: everything goes through the router it connects to (which must then be there).
+    Client,
+}
+
+/// What a publisher does when the transport's queue is full.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CongestionPolicy {
+    /// Drop the sample (the default: never stall the tracker; what rmw_zenoh does for keep-last publishers).
+    #[default]
+    Drop,
+    /// Block the caller until there is room (loss-free, but a slow subscriber can stall the tick loop).
+    Block,
+}
+
+/// zenoh / ROS 2 publishing settings; the runtime's TOML configuration embeds this table (e.g. `[zenoh]`).
+/// Every field has a default, unknown keys are rejected.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ZenohConfig {
+    /// Session mode, `peer` (default) or `client`.
+    pub mode: SessionMode,
+    /// Endpoints to connect to. Default `["tcp/127.0.0.1:7447"]`, the local router (`ros2 run rmw_zenoh_cpp
+    /// rmw_zenohd`) when one runs; in peer mode a missing router is retried in the background, never required.
+    pub connect: Vec<String>,
+    /// Endpoints to listen on. Default `["tcp/127.0.0.1:0"]` (loopback, a free port).
+    pub listen: Vec<String>,
+    /// UDP multicast scouting. Default off (loopback-only by default).
+    pub multicast_scouting: bool,
+    /// ROS domain id (`ROS_DOMAIN_ID`), default 0: the first component of every rmw_zenoh key.
+    pub domain_id: u32,
+    /// Topic prefix: poses go on `<prefix>/<object>/pose`, status on `<prefix>/status`. Default `eventtrack6d`.
+    pub topic_prefix: String,
+    /// `header.frame_id` of every pose. Default `eventtrack6d_camera` (the event camera, OpenCV convention).
+    pub frame_id: String,
+    /// ROS node name that the liveliness tokens announce. Default `eventtrack6d`.
+    pub node_name: String,
+    /// ROS node namespace that the liveliness tokens announce. Default `/`.
+    pub node_namespace: String,
+    /// Congestion control of the pose publishers, `drop` (default) or `block`.
+    pub congestion_control: CongestionPolicy,
+    /// Express (unbatched) pose samples: lower latency. Default true.
+    pub express: bool,
+}
+
+impl Default for ZenohConfig {
+    fn default() -> Self {
+        Self {
+            mode: SessionMode::Peer,
+            connect: vec!["tcp/127.0.0.1:7447".into()],
+            listen: vec!["tcp/127.0.0.1:0".into()],
+            multicast_scouting: false,
+            domain_id: 0,
+            topic_prefix: "eventtrack6d".into(),
+            frame_id: "eventtrack6d_camera".into(),
+            node_name: "eventtrack6d".into(),
+            node_namespace: "/".into(),
+            congestion_control: CongestionPolicy::Drop,
+            express: true,
+        }
+    }
+}
+
+impl ZenohConfig {
+    /// The ROS topic of an object's poses: `<prefix>/<object>/pose` (no leading `/`).
+    pub fn pose_topic(&self, object: &str) -> String {
+        join_topic(&self.topic_prefix, &format!("{object}/pose"))
+    }
+
+    /// The zenoh key of the JSON status: `<prefix>/status`.
+    pub fn status_key_expr(&self) -> String {
+        join_topic(&self.topic_prefix, "status")
+    }
+
+    /// Checks names and builds the zenoh session configuration.
+    pub fn to_zenoh_config(&self) -> Result<zenoh::Config, ZenohSetupError> {
+        ros2::check_name_path(&self.topic_prefix).map_err(|message| ZenohSetupError::Config {
+            key: "zenoh.topic_prefix",
+            message,
+        })?;
+        ros2::check_name_path(&self.node_namespace).map_err(|message| ZenohSetupError::Config {
+            key: "zenoh.node_namespace",
+            message,
+        })?;
+        ros2::check_name_token(&self.node_name).map_err(|message| ZenohSetupError::Config {
+            key: "zenoh.node_name",
+            message,
+        })?;
+        if self.frame_id.contains('\0') {
+            return Err(ZenohSetupError::Config {
+                key: "zenoh.frame_id",
+                message: "contains a NUL byte".into(),
+            });
+        }
+        let mut c = zenoh::Config::default();
+        let mode = match self.mode {
+            SessionMode::Peer => "\"peer\"",
+            SessionMode::Client => "\"client\"",
+        };
+        set(&mut c, "zenoh.mode", "mode", mode)?;
+        let endpoints = |v: &Vec<String>| serde_json::to_string(v).unwrap_or_else(|_| "[]".into());
+        set(
+            &mut c,
+            "zenoh.connect",
+            "connect/endpoints",
+            &endpoints(&self.connect),
+        )?;
+        set(
+            &mut c,
+            "zenoh.listen",
+            "listen/endpoints",
+            &endpoints(&self.listen),
+        )?;
+        let scouting = if self.multicast_scouting {
+            "true"
+        } else {
+            "false"
+        };
+        set(
+            &mut c,
+            "zenoh.multicast_scouting",
+            "scouting/multicast/enabled",
+            scouting,
+        )?;
+        Ok(c)
+    }
+}
+
+fn join_topic(prefix: &str, rest: &str) -> String {
+    let prefix = prefix.trim_matches('/');
+    if prefix.is_empty() {
+        rest.to_owned()
+    } else {
+        format!("{prefix}/{rest}")
+    }
+}
+
+fn set(
+    c: &mut zenoh::Config,
+    key: &'static str,
+    path: &str,
+    json: &str,
+) -> Result<(), ZenohSetupError> {
+    c.insert_json5(path, json)
+        .map_err(|e| ZenohSetupError::Config {
+            key,
+            message: e.to_string(),
+        })
+}
+
+/// Why the zenoh sink could not be set up.
+#[derive(Debug, thiserror::Error)]
+pub enum ZenohSetupError {
+    /// A configuration value is invalid (`key` names it, e.g. `zenoh.connect`).
+    #[error("{key}: {message}")]
+    Config {
+        /// Configuration key.
+        key: &'static str,
+        /// What is wrong.
+        message: String,
+    },
+    /// An object name cannot be used in a ROS topic / zenoh key.
+    #[error("zenoh: object name {name:?} cannot be used in a topic: {reason}")]
+    ObjectName {
+        /// The object name.
+        name: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The zenoh session did not open (e.g. a listen endpoint is taken).
+    #[error("zenoh: could not open the session: {0}")]
+    Open(String),
+    /// A publisher or liveliness token could not be declared.
+    #[error("zenoh: could not declare the {what} on {key:?}: {message}")]
+    Declare {
+        /// `publisher` or `liveliness token`.
+        what: &'static str,
+        /// Key expression.
+        key: String,
+        /// zenoh's message.
+        message: String,
+    },
+}
+
+/// One object's publisher and its rmw_zenoh bookkeeping.
+struct ObjectPublisher {
+    publisher: Publisher<'static>,
+    key_expr: String,
+    liveliness_key_expr: String,
+    gid: [u8; ros2::GID_LEN],
+    next_sequence: i64,
+}
+
+/// Publishes poses over zenoh in rmw_zenoh's format; see the module documentation.
+///
+/// Header stamps: `header.stamp = t_us * 1000 + ros_time_offset_ns` nanoseconds, i.e. the pose's time on the event
+/// camera's clock shifted into ROS time by an offset fixed at construction. With offset 0 the stamp is the camera
+/// clock itself; to stamp in ROS (system) time, the runtime passes `system_time_ns - camera_time_ns` measured at one
+/// instant (e.g. when the first trigger edge is decoded).
+pub struct ZenohPosePublisher {
+    session: zenoh::Session,
+    objects: Vec<ObjectPublisher>,
+    status: Publisher<'static>,
+    status_key_expr: String,
+    node_liveliness_key_expr: String,
+    tokens: Vec<LivelinessToken>,
+    frame_id: String,
+    ros_time_offset_ns: i64,
+    buffer: Vec<u8>,
+    counters: SinkCounters,
+    status_counters: SinkCounters,
+}
+
+impl ZenohPosePublisher {
+    /// Opens a zenoh session from `config`, declares one pose publisher per object (in `objects` order, matching
+    /// [`crate::track::PoseEstimate::object`]), the status publisher, and the node and publisher liveliness tokens.
+    /// Returns promptly when no router is reachable (peer mode retries in the background).
+    pub fn new(
+        config: &ZenohConfig,
+        objects: &[String],
+        ros_time_offset_ns: i64,
+    ) -> Result<Self, ZenohSetupError> {
+        for (i, name) in objects.iter().enumerate() {
+            ros2::check_name_token(name).map_err(|reason| ZenohSetupError::ObjectName {
+                name: name.clone(),
+                reason,
+            })?;
+            if objects[..i].contains(name) {
+                return Err(ZenohSetupError::ObjectName {
+                    name: name.clone(),
+                    reason: "appears twice".into(),
+                });
+            }
+        }
+        let zconfig = config.to_zenoh_config()?;
+        let session = zenoh::open(zconfig)
+            .wait()
+            .map_err(|e| ZenohSetupError::Open(e.to_string()))?;
+        let node = RosNodeIdentity {
+            domain_id: config.domain_id,
+            zid: session.zid().to_string(),
+            node_id: 0,
+            enclave: "/".into(),
+            namespace: ros2::fully_qualified_topic(&config.node_namespace),
+            name: config.node_name.clone(),
+        };
+        let congestion = match config.congestion_control {
+            CongestionPolicy::Drop => CongestionControl::Drop,
+            CongestionPolicy::Block => CongestionControl::Block,
+        };
+
+        let declare_token = |key: &str| {
+            session
+                .liveliness()
+                .declare_token(key.to_owned())
+                .wait()
+                .map_err(|e| ZenohSetupError::Declare {
+                    what: "liveliness token",
+                    key: key.to_owned(),
+                    message: e.to_string(),
+                })
+        };
+        let node_liveliness_key_expr = ros2::node_liveliness_key_expr(&node);
+        let mut tokens = vec![declare_token(&node_liveliness_key_expr)?];
+
+        let mut pubs = Vec::with_capacity(objects.len());
+        for (i, name) in objects.iter().enumerate() {
+            let topic = config.pose_topic(name);
+            let key_expr = ros2::pose_stamped_key_expr(config.domain_id, &topic);
+            let publisher = session
+                .declare_publisher(key_expr.clone())
+                .priority(Priority::RealTime)
+                .express(config.express)
+                .congestion_control(congestion)
+                .wait()
+                .map_err(|e| ZenohSetupError::Declare {
+                    what: "publisher",
+                    key: key_expr.clone(),
+                    message: e.to_string(),
+                })?;
+            let entity_id = i as u64 + 1;
+            let liveliness_key_expr = ros2::publisher_liveliness_key_expr(
+                &node,
+                entity_id,
+                &topic,
+                ros2::POSE_STAMPED_TYPE_NAME,
+                ros2::POSE_STAMPED_TYPE_HASH,
+                ros2::DEFAULT_QOS_KEY,
+            );
+            tokens.push(declare_token(&liveliness_key_expr)?);
+            pubs.push(ObjectPublisher {
+                publisher,
+                key_expr,
+                liveliness_key_expr,
+                gid: random_gid(&node.zid, entity_id),
+                next_sequence: 1,
+            });
+        }
+
+        let status_key_expr = config.status_key_expr();
+        let status = session
+            .declare_publisher(status_key_expr.clone())
+            .encoding(Encoding::APPLICATION_JSON)
+            .congestion_control(CongestionControl::Drop)
+            .wait()
+            .map_err(|e| ZenohSetupError::Declare {
+                what: "publisher",
+                key: status_key_expr.clone(),
+                message: e.to_string(),
+            })?;
+
+        let buffer = Vec::with_capacity(ros2::pose_stamped_encoded_len(config.frame_id.len()));
+        Ok(Self {
+            session,
+            objects: pubs,
+            status,
+            status_key_expr,
+            node_liveliness_key_expr,
+            tokens,
+            frame_id: config.frame_id.clone(),
+            ros_time_offset_ns,
+            buffer,
+            counters: SinkCounters::default(),
+            status_counters: SinkCounters::default(),
+        })
+    }
+
+    /// The zenoh session id, as it appears in the liveliness tokens.
+    pub fn zid(&self) -> String {
+        self.session.zid().to_string()
+    }
+
+    /// The rmw_zenoh data key expression of object `object` (index into the constructor's `objects`).
+    pub fn pose_key_expr(&self, object: usize) -> Option<&str> {
+        self.objects.get(object).map(|p| p.key_expr.as_str())
+    }
+
+    /// The GID that object `object`'s samples carry in their attachment.
+    pub fn gid(&self, object: usize) -> Option<[u8; ros2::GID_LEN]> {
+        self.objects.get(object).map(|p| p.gid)
+    }
+
+    /// The key expression of the JSON status.
+    pub fn status_key_expr(&self) -> &str {
+        &self.status_key_expr
+    }
+
+    /// The liveliness tokens declared while the sink lives: the node's first, then one per pose publisher.
+    pub fn liveliness_key_exprs(&self) -> Vec<&str> {
+        std::iter::once(self.node_liveliness_key_expr.as_str())
+            .chain(self.objects.iter().map(|p| p.liveliness_key_expr.as_str()))
+            .collect()
+    }
+
+    /// Puts a status document (JSON bytes, built by the runtime) on the status key. Failures are counted in
+    /// [`Self::status_counters`] and returned.
+    pub fn put_status(&mut self, json: &[u8]) -> Result<(), PublishError> {
+        match self.status.put(json).wait() {
+            Ok(()) => {
+                self.status_counters.published += 1;
+                Ok(())
+            }
+            Err(e) => {
+                self.status_counters.failed += 1;
+                Err(transport(format!(
+                    "status put on {:?}: {e}",
+                    self.status_key_expr
+                )))
+            }
+        }
+    }
+
+    /// Status puts done and failed so far.
+    pub fn status_counters(&self) -> SinkCounters {
+        self.status_counters
+    }
+
+    /// Undeclares the liveliness tokens and closes the session (also done, without reporting errors, on drop).
+    pub fn close(mut self) -> Result<(), PublishError> {
+        let mut first_err = None;
+        for token in self.tokens.drain(..) {
+            if let Err(e) = token.undeclare().wait() {
+                first_err.get_or_insert(format!("undeclaring a liveliness token: {e}"));
+            }
+        }
+        if let Err(e) = self.session.close().wait() {
+            first_err.get_or_insert(format!("closing the session: {e}"));
+        }
+        first_err.map_or(Ok(()), |m| Err(transport(m)))
+    }
+
+    fn publish_one(&mut self, estimate: &crate::track::PoseEstimate) -> Result<(), String> {
+        let stamp_ns = estimate
+            .t_us
+            .checked_mul(1000)
+            .and_then(|ns| ns.checked_add(self.ros_time_offset_ns))
+            .ok_or_else(|| {
+                format!(
+                    "pose time {} us + offset overflows i64 nanoseconds",
+                    estimate.t_us
+                )
+            })?;
+        let stamp = RosTime::from_nanos(stamp_ns).map_err(|e| e.to_string())?;
+        let n_objects = self.objects.len();
+        let p = self.objects.get_mut(estimate.object).ok_or_else(|| {
+            format!(
+                "object index {} but only {n_objects} publishers",
+                estimate.object
+            )
+        })?;
+        ros2::encode_pose_stamped_isometry(&mut self.buffer, stamp, &self.frame_id, &estimate.pose);
+        let attachment = Attachment {
+            sequence_number: p.next_sequence,
+            source_timestamp_ns: system_time_ns(),
+            gid: p.gid,
+        }
+        .to_bytes();
+        p.next_sequence += 1;
+        p.publisher
+            .put(self.buffer.as_slice())
+            .attachment(&attachment)
+            .wait()
+            .map_err(|e| format!("put on {:?}: {e}", p.key_expr))
+    }
+}
+
+impl PoseSink for ZenohPosePublisher {
+    fn name(&self) -> &str {
+        SINK_NAME
+    }
+
+    /// Publishes every estimate on its object's key; a failure is counted and the other objects are still published.
+    fn publish(&mut self, poses: &TickPoses<'_>) -> Result<(), PublishError> {
+        let mut first_err = None;
+        for estimate in poses.estimates {
+            match self.publish_one(estimate) {
+                Ok(()) => self.counters.published += 1,
+                Err(message) => {
+                    self.counters.failed += 1;
+                    first_err.get_or_insert(message);
+                }
+            }
+        }
+        first_err.map_or(Ok(()), |m| Err(transport(m)))
+    }
+
+    fn counters(&self) -> SinkCounters {
+        self.counters
+    }
+}
+
+fn transport(message: String) -> PublishError {
+    PublishError::Transport {
+        sink: SINK_NAME.into(),
+        message,
+    }
+}
+
+/// Nanoseconds since the Unix epoch on the system clock (0 if the clock is before 1970, saturated past 2262).
+fn system_time_ns() -> i64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
+}
+
+/// A random 16-byte GID: std's randomly keyed SipHash (keys seeded from the OS) over the session id, the entity id
+/// and the time, as rmw_zenoh's publishers draw theirs at random.
+fn random_gid(zid: &str, entity_id: u64) -> [u8; ros2::GID_LEN] {
+    let mut gid = [0u8; ros2::GID_LEN];
+    for (half, chunk) in gid.chunks_mut(8).enumerate() {
+        let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+        h.write(zid.as_bytes());
+        h.write_u64(entity_id);
+        h.write_usize(half);
+        h.write_i64(system_time_ns());
+        chunk.copy_from_slice(&h.finish().to_le_bytes());
+    }
+    gid
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn config_defaults_and_unknown_keys() {
+        let c: ZenohConfig = serde_json::from_str("{}").unwrap();
+        assert_eq!(c, ZenohConfig::default());
+        assert_eq!(c.connect, ["tcp/127.0.0.1:7447"]);
+        assert_eq!(c.listen, ["tcp/127.0.0.1:0"]);
+        assert!(!c.multicast_scouting);
+        assert_eq!(c.mode, SessionMode::Peer);
+        assert_eq!(c.congestion_control, CongestionPolicy::Drop);
+        assert_eq!(c.pose_topic("mug"), "eventtrack6d/mug/pose");
+        assert_eq!(c.status_key_expr(), "eventtrack6d/status");
+        let e = serde_json::from_str::<ZenohConfig>(r#"{"conect": []}"#).unwrap_err();
+        assert!(e.to_string().contains("unknown field `conect`"), "{e}");
+        let c: ZenohConfig =
+            serde_json::from_str(r#"{"congestion_control": "block", "mode": "client"}"#).unwrap();
+        assert_eq!(
+            (c.congestion_control, c.mode),
+            (CongestionPolicy::Block, SessionMode::Client)
+        );
+        assert!(serde_json::from_str::<ZenohConfig>(r#"{"congestion_control": "wait"}"#).is_err());
+    }
+
+    #[test]
+    fn bad_config_values_name_the_key() {
+        let c = ZenohConfig {
+            topic_prefix: "robot/*".into(),
+            ..Default::default()
+        };
+        let e = c.to_zenoh_config().unwrap_err();
+        assert!(e.to_string().starts_with("zenoh.topic_prefix:"), "{e}");
+        let c = ZenohConfig {
+            connect: vec!["nonsense".into()],
+            ..Default::default()
+        };
+        let e = c.to_zenoh_config().unwrap_err();
+        assert!(e.to_string().starts_with("zenoh.connect:"), "{e}");
+        let c = ZenohConfig {
+            node_name: "my node".into(),
+            ..Default::default()
+        };
+        assert!(
+            c.to_zenoh_config()
+                .unwrap_err()
+                .to_string()
+                .starts_with("zenoh.node_name:")
+        );
+        assert!(ZenohConfig::default().to_zenoh_config().is_ok());
+        let root = ZenohConfig {
+            topic_prefix: "/".into(),
+            ..Default::default()
+        };
+        assert_eq!(root.pose_topic("mug"), "mug/pose");
+    }
+
+    #[test]
+    fn gids_differ() {
+        let a = random_gid("abc", 1);
+        let b = random_gid("abc", 1);
+        let c = random_gid("abc", 2);
+        assert_ne!(a, b);
+        assert_ne!(a, c);
+        assert_ne!(a, [0; 16]);
+    }
+}
