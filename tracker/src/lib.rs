@@ -6,3 +6,4 @@ pub mod mesh;
 pub mod render;
 pub mod track;
 pub mod publish;
+pub mod runtime;

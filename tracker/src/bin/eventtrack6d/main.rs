@@ -2,9 +2,13 @@
 
 mod bench;
 mod convert;
+mod demo;
+mod demo_sequence;
 mod eval;
 mod inspect;
 mod progress;
+mod run;
+mod session;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -23,6 +27,8 @@ enum Command {
     Convert(convert::ConvertArgs),
     Eval(eval::EvalArgs),
     Bench(bench::BenchArgs),
+    Run(run::RunArgs),
+    Demo(demo::DemoArgs),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +38,8 @@ fn main() -> ExitCode {
         Command::Convert(args) => convert::run(&args),
         Command::Eval(args) => eval::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Run(args) => run::run(&args),
+        Command::Demo(args) => demo::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

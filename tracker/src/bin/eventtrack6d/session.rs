@@ -1,0 +1,88 @@
+//! Running a configuration with live progress on the terminal, then scoring the published poses against the
+//! recording's ground truth (shared by `run` and `demo`).
+
+use anyhow::{Context, Result};
+use drivers::recording::Recording;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use tracker::eval::{
+    AucLimit, PoseTrack, evaluate_object, ground_truth_objects, parse_pose_csv, recording_ticks,
+};
+use tracker::runtime::{self, Config, Health, Hooks, StopFlag, Summary};
+
+fn fmt_us(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.0}us"))
+}
+
+/// Runs `config` to its end (or Ctrl-C) with a progress bar of `expected_ticks` on a terminal.
+pub fn execute(config: &Config, expected_ticks: Option<u64>) -> Result<Summary> {
+    let bar = ProgressBar::with_draw_target(expected_ticks, ProgressDrawTarget::stderr());
+    let style = ProgressStyle::with_template("{spinner} [{bar:24}] {pos}/{len} ticks {msg}")
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> ");
+    bar.set_style(style);
+    let shared = Arc::new(Mutex::new(bar.clone()));
+    let progress = move |h: &Health| {
+        let l = h.latency.summary();
+        let rate = h
+            .tick_rate_hz()
+            .map_or_else(|| "-".into(), |r| format!("{r:.1} Hz"));
+        let b = shared.lock().unwrap_or_else(|p| p.into_inner());
+        b.set_position(h.ticks);
+        b.set_message(format!(
+            "| {rate} | latency p50 {} p99 {} max {} | dropped events {}",
+            fmt_us(l.p50_us),
+            fmt_us(l.p99_us),
+            fmt_us(l.max_us),
+            h.queue.dropped_events
+        ));
+    };
+    let hooks = Hooks {
+        progress: Some(Box::new(progress)),
+        progress_period: Duration::from_millis(100),
+        before_start: None,
+        stop: StopFlag::new(),
+        ctrl_c: true,
+    };
+    let result = runtime::run(config, hooks);
+    bar.finish_and_clear();
+    Ok(result?)
+}
+
+/// The number of ticks a recording should produce at its trigger rate (for the progress bar).
+pub fn expected_ticks(rec: &Recording) -> Option<u64> {
+    let gt = rec.ground_truth.as_ref()?;
+    let (first, last) = (gt.first()?.t_us, gt.iter().map(|p| p.t_us).max()?);
+    Some(((last - first) as f64 * 1e-6 * rec.meta.trigger.tick_rate_hz).round() as u64)
+}
+
+/// ADD-S / ADD AUC and AR (percent, 120 Hz) of each object of `poses_csv` against `recording`'s ground truth.
+pub fn accuracy(recording: &Path, poses_csv: &Path) -> Result<Vec<(String, tracker::eval::Summary)>> {
+    let rec = Recording::open(recording)?;
+    let text = std::fs::read_to_string(poses_csv)
+        .with_context(|| format!("cannot read {}", poses_csv.display()))?;
+    let preds = parse_pose_csv(&text).with_context(|| poses_csv.display().to_string())?;
+    let ticks = recording_ticks(&rec)?;
+    let mut out = Vec::new();
+    for object in ground_truth_objects(&rec)? {
+        let track = PoseTrack::from_records(&preds, &object);
+        let seq = evaluate_object(&rec, &ticks, &object, &track)?;
+        out.push((object, seq.summary(false, AucLimit::Diameter)));
+    }
+    Ok(out)
+}
+
+/// Prints the accuracy table.
+pub fn print_accuracy(rows: &[(String, tracker::eval::Summary)], method: &str) {
+    println!(
+        "accuracy ({method}, every 120 Hz tick, AUC to 0.1 x diameter, percent):"
+    );
+    for (o, s) in rows {
+        println!(
+            "  {o:<14} ADD-S {:6.2}  ADD {:6.2}  AR {:6.2}  ({} ticks)",
+            s.add_s, s.add, s.ar, s.frames
+        );
+    }
+}

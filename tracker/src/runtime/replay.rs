@@ -1,0 +1,257 @@
+//! Recording replay: `events.raw` decoded chunk by chunk (`Recording::events`, the format's streaming decoder)
+//! into event batches and trigger edges, paced by the recording's clock (real time) or as fast as the tracker
+//! takes them, with each depth frame delivered when the trigger edge that completes its phase-coded pulse arrives
+//! (frames are read ahead on a helper thread so PNG decoding never delays the stream).
+
+use super::config::Pace;
+use super::source::{Source, SourceError, SourceOutput, SourceStats, StopFlag};
+use drivers::event::{CdEvent, EventBuffer, TriggerEdge};
+use drivers::recording::{DepthFrame, Recording};
+use std::sync::mpsc::{Receiver, sync_channel};
+use std::time::{Duration, Instant};
+
+/// Replays a recording directory.
+pub struct ReplaySource {
+    recording: Recording,
+    pace: Pace,
+    batch_events: usize,
+    batch_us: i64,
+    start_delay: Duration,
+}
+
+impl ReplaySource {
+    /// A replay of `recording`; events are delivered in batches of at most `batch_events` events spanning at most
+    /// `batch_us` microseconds.
+    pub fn new(
+        recording: Recording,
+        pace: Pace,
+        batch_events: usize,
+        batch_us: i64,
+        start_delay: Duration,
+    ) -> Self {
+        Self {
+            recording,
+            pace,
+            batch_events: batch_events.max(1),
+            batch_us: batch_us.max(1),
+            start_delay,
+        }
+    }
+
+    /// The recording.
+    pub fn recording(&self) -> &Recording {
+        &self.recording
+    }
+}
+
+type DepthItem = (u64, Result<DepthFrame, String>);
+
+/// Reads the recording's depth frames in order on a helper thread, a couple ahead of use.
+fn spawn_depth_reader(rec: &Recording, stop: StopFlag) -> Receiver<DepthItem> {
+    let (tx, rx) = sync_channel::<DepthItem>(2);
+    let rec = rec.clone();
+    std::thread::Builder::new()
+        .name("depth-reader".into())
+        .spawn(move || {
+            for &n in &rec.depth_frames {
+                if stop.is_set() {
+                    break;
+                }
+                let frame = rec.depth_frame(n).map_err(|e| e.to_string());
+                if tx.send((n, frame)).is_err() {
+                    break;
+                }
+            }
+        })
+        .map_or_else(
+            |_| {
+                // No thread: the stream goes on without depth (every frame counted missing).
+                let (_tx, rx) = sync_channel(1);
+                rx
+            },
+            |_| rx,
+        )
+}
+
+/// Wall-clock pacing against the recording's clock.
+struct Pacer {
+    realtime: bool,
+    origin: Option<(i64, Instant)>,
+}
+
+impl Pacer {
+    /// Waits until the wall clock reaches recording time `t_us` (real time only).
+    fn until(&mut self, t_us: i64) {
+        if !self.realtime {
+            return;
+        }
+        let (t0, w0) = *self.origin.get_or_insert((t_us, Instant::now()));
+        let target = w0 + Duration::from_micros(u64::try_from(t_us - t0).unwrap_or(0));
+        let now = Instant::now();
+        if target > now {
+            std::thread::sleep(target - now);
+        }
+    }
+}
+
+struct Replayer<'a> {
+    out: &'a SourceOutput,
+    pacer: Pacer,
+    batch: Vec<CdEvent>,
+    batch_events: usize,
+    batch_us: i64,
+    channel: u8,
+    wide_threshold_us: i64,
+    pending_rise: Option<i64>,
+    wide_pulses: u64,
+    depth: Receiver<DepthItem>,
+    next_depth: Option<DepthItem>,
+    depth_done: bool,
+    stats: SourceStats,
+}
+
+impl Replayer<'_> {
+    fn flush(&mut self) {
+        if let Some(last) = self.batch.last() {
+            self.pacer.until(last.t_us);
+            let full = std::mem::replace(&mut self.batch, self.out.buffer());
+            self.out.events(full);
+        }
+    }
+
+    fn cd(&mut self, e: CdEvent) {
+        if let Some(first) = self.batch.first()
+            && (self.batch.len() >= self.batch_events || e.t_us - first.t_us >= self.batch_us)
+        {
+            self.flush();
+        }
+        self.batch.push(e);
+        self.stats.events += 1;
+    }
+
+    /// The depth frame numbered `n`, if the recording has it (frames are read in order).
+    fn depth_frame(&mut self, n: u64) -> Option<DepthFrame> {
+        loop {
+            if self.next_depth.is_none() && !self.depth_done {
+                match self.depth.recv() {
+                    Ok(item) => self.next_depth = Some(item),
+                    Err(_) => self.depth_done = true,
+                }
+            }
+            match self.next_depth.take() {
+                None => return None,
+                Some((k, _)) if k < n => continue,
+                Some((k, frame)) if k == n => return frame.ok(),
+                Some(later) => {
+                    self.next_depth = Some(later);
+                    return None;
+                }
+            }
+        }
+    }
+
+    fn trigger(&mut self, edge: TriggerEdge) {
+        self.flush();
+        self.pacer.until(edge.t_us);
+        self.stats.trigger_edges += 1;
+        if edge.channel == self.channel {
+            if edge.rising {
+                self.pending_rise = Some(edge.t_us);
+            } else if let Some(rise) = self.pending_rise.take()
+                && edge.t_us - rise >= self.wide_threshold_us
+            {
+                // The falling edge of a phase-coded pulse: its depth frame goes first, so the tracker has it
+                // before the tick that the timeline makes of this pulse.
+                let n = self.wide_pulses;
+                self.wide_pulses += 1;
+                match self.depth_frame(n) {
+                    Some(frame) => {
+                        self.stats.depth_frames += 1;
+                        self.out.depth(rise, Box::new(frame));
+                    }
+                    None => self.stats.depth_missing += 1,
+                }
+            }
+        }
+        self.out.trigger(edge);
+    }
+}
+
+impl Source for ReplaySource {
+    fn describe(&self) -> String {
+        format!(
+            "replay of {} ({})",
+            self.recording.dir().display(),
+            match self.pace {
+                Pace::Realtime => "real time",
+                Pace::Fast => "as fast as possible",
+            }
+        )
+    }
+
+    fn run(&mut self, out: &SourceOutput, stop: &StopFlag) -> Result<SourceStats, SourceError> {
+        let mut reader = self
+            .recording
+            .events()
+            .map_err(|e| SourceError::Input(e.to_string()))?;
+        let schedule = self.recording.meta.trigger;
+        let mut r = Replayer {
+            out,
+            pacer: Pacer {
+                realtime: self.pace == Pace::Realtime,
+                origin: None,
+            },
+            batch: out.buffer(),
+            batch_events: self.batch_events,
+            batch_us: self.batch_us,
+            channel: schedule.channel,
+            wide_threshold_us: (schedule.narrow_width_us + schedule.wide_width_us) / 2,
+            pending_rise: None,
+            wide_pulses: 0,
+            depth: spawn_depth_reader(&self.recording, stop.clone()),
+            next_depth: None,
+            depth_done: false,
+            stats: SourceStats::default(),
+        };
+        let deadline = Instant::now() + self.start_delay;
+        while Instant::now() < deadline && !stop.is_set() {
+            std::thread::sleep(Duration::from_millis(10).min(deadline - Instant::now()));
+        }
+        let mut chunk = EventBuffer::new();
+        loop {
+            if stop.is_set() {
+                r.stats.stopped = true;
+                break;
+            }
+            chunk.clear();
+            let more = reader
+                .read_chunk(&mut chunk)
+                .map_err(|e| SourceError::Input(e.to_string()))?;
+            // Merge the chunk's CD events and trigger edges by time (edges first at equal times).
+            let (mut i, mut j) = (0, 0);
+            while i < chunk.cd.len() || j < chunk.triggers.len() {
+                let take_edge = match (chunk.cd.get(i), chunk.triggers.get(j)) {
+                    (Some(c), Some(t)) => t.t_us <= c.t_us,
+                    (None, Some(_)) => true,
+                    _ => false,
+                };
+                if take_edge {
+                    r.trigger(chunk.triggers[j]);
+                    j += 1;
+                    if stop.is_set() {
+                        break;
+                    }
+                } else {
+                    r.cd(chunk.cd[i]);
+                    i += 1;
+                }
+            }
+            if !more {
+                break;
+            }
+        }
+        r.flush();
+        r.stats.set_anomalies(reader.anomalies());
+        Ok(r.stats)
+    }
+}

@@ -1,0 +1,213 @@
+//! The tracker thread: takes ingest in order, turns trigger edges into ticks through the trigger timeline, drives
+//! the tracker, hands every tick's estimates to each sink, and measures latency (edge decoded -> after each sink,
+//! and after all sinks). Steady state allocates nothing: buffers are reused and event batches recycled.
+
+use super::health::Health;
+use super::queue::{Ingest, IngestQueue};
+use crate::publish::{PoseSink, TickPoses};
+use crate::track::{PoseEstimate, PoseTracker};
+use drivers::timeline::{TimelineConfig, TriggerTimeline};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+/// A pose sink shared between the tracker thread and another task (e.g. the status timer of the zenoh sink).
+pub struct SharedSink<S: PoseSink> {
+    name: String,
+    inner: Arc<Mutex<S>>,
+}
+
+impl<S: PoseSink> SharedSink<S> {
+    /// Wraps `inner`; its name is read once here.
+    pub fn new(inner: Arc<Mutex<S>>) -> Self {
+        let name = inner
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .name()
+            .to_string();
+        Self { name, inner }
+    }
+
+    fn lock(&self) -> MutexGuard<'_, S> {
+        self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+impl<S: PoseSink> PoseSink for SharedSink<S> {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn publish(&mut self, poses: &TickPoses<'_>) -> Result<(), crate::publish::PublishError> {
+        self.lock().publish(poses)
+    }
+    fn counters(&self) -> crate::publish::SinkCounters {
+        self.lock().counters()
+    }
+    fn flush(&mut self) -> Result<(), crate::publish::PublishError> {
+        self.lock().flush()
+    }
+}
+
+/// What the tracker thread reports when it ends.
+pub struct WorkerEnd {
+    /// The sinks, flushed (returned so the caller can close them).
+    pub sinks: Vec<Box<dyn PoseSink>>,
+    /// Flush errors, by sink name.
+    pub flush_errors: Vec<String>,
+}
+
+/// The tracker thread's state.
+pub struct Worker {
+    tracker: Box<dyn PoseTracker>,
+    sinks: Vec<Box<dyn PoseSink>>,
+    timeline: TriggerTimeline,
+    queue: Arc<IngestQueue>,
+    health: Arc<Mutex<Health>>,
+    objects: Vec<String>,
+    estimates: Vec<PoseEstimate>,
+    sink_latency: Vec<Duration>,
+    sink_failed: Vec<Option<String>>,
+    first_tick_wall: Option<Instant>,
+    reported_errors: Vec<bool>,
+}
+
+impl Worker {
+    /// A worker driving `tracker` and `sinks` from `queue`, reporting into `health`.
+    pub fn new(
+        tracker: Box<dyn PoseTracker>,
+        sinks: Vec<Box<dyn PoseSink>>,
+        timeline: TimelineConfig,
+        queue: Arc<IngestQueue>,
+        health: Arc<Mutex<Health>>,
+    ) -> Self {
+        let objects = tracker.objects().to_vec();
+        let n = sinks.len();
+        Self {
+            estimates: Vec::with_capacity(objects.len().max(1) * 2),
+            objects,
+            tracker,
+            sinks,
+            timeline: TriggerTimeline::new(timeline),
+            queue,
+            health,
+            sink_latency: vec![Duration::ZERO; n],
+            sink_failed: vec![None; n],
+            first_tick_wall: None,
+            reported_errors: vec![false; n],
+        }
+    }
+
+    fn health(&self) -> MutexGuard<'_, Health> {
+        self.health.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Runs until the queue delivers [`Ingest::End`]; then finishes the timeline, flushes the sinks and returns them.
+    pub fn run(mut self) -> WorkerEnd {
+        loop {
+            let Some(item) = self.queue.pop(Duration::from_millis(100)) else {
+                continue;
+            };
+            match item {
+                Ingest::Events(events) => {
+                    self.tracker.push_events(&events);
+                    let n = events.len() as u64;
+                    self.queue.recycle(events);
+                    self.health().events += n;
+                }
+                Ingest::Depth { t_us, frame } => {
+                    self.tracker.push_depth(t_us, &frame);
+                    self.health().depth_frames += 1;
+                }
+                Ingest::Trigger { edge, decoded_at } => {
+                    self.timeline.push(edge);
+                    while let Some(tick) = self.timeline.pop_tick() {
+                        self.tick(&tick, decoded_at);
+                    }
+                }
+                Ingest::End => {
+                    self.timeline.finish();
+                    let now = Instant::now();
+                    while let Some(tick) = self.timeline.pop_tick() {
+                        self.tick(&tick, now);
+                    }
+                    break;
+                }
+            }
+        }
+        let mut flush_errors = Vec::new();
+        for s in &mut self.sinks {
+            if let Err(e) = s.flush() {
+                flush_errors.push(e.to_string());
+            }
+        }
+        self.sync_counters();
+        WorkerEnd {
+            sinks: self.sinks,
+            flush_errors,
+        }
+    }
+
+    fn sync_counters(&mut self) {
+        let queue = self.queue.counters();
+        let timeline = *self.timeline.counters();
+        let mut h = self.health.lock().unwrap_or_else(|p| p.into_inner());
+        h.queue = queue;
+        h.timeline = timeline;
+        for (sh, s) in h.sinks.iter_mut().zip(&self.sinks) {
+            sh.counters = s.counters();
+        }
+    }
+
+    fn tick(&mut self, tick: &drivers::timeline::Tick, decoded_at: Instant) {
+        self.estimates.clear();
+        self.tracker.tick(tick, &mut self.estimates);
+        let poses = TickPoses {
+            tick,
+            estimates: &self.estimates,
+            objects: &self.objects,
+            decoded_at,
+        };
+        for (i, sink) in self.sinks.iter_mut().enumerate() {
+            let r = sink.publish(&poses);
+            self.sink_latency[i] = decoded_at.elapsed();
+            if let Err(e) = r {
+                if !self.reported_errors[i] {
+                    self.reported_errors[i] = true;
+                    eprintln!(
+                        "warning: sink {}: {e} (further errors are counted)",
+                        sink.name()
+                    );
+                }
+                self.sink_failed[i] = Some(e.to_string());
+            }
+        }
+        let total = decoded_at.elapsed();
+        let now = Instant::now();
+        let first = *self.first_tick_wall.get_or_insert(now);
+        let queue = self.queue.counters();
+        let timeline = *self.timeline.counters();
+        let mut h = self.health.lock().unwrap_or_else(|p| p.into_inner());
+        h.ticks += 1;
+        h.poses += self.estimates.len() as u64;
+        h.first_tick_us.get_or_insert(tick.t_us);
+        h.last_tick_us = Some(tick.t_us);
+        h.tick_wall_s = (now - first).as_secs_f64();
+        h.latency.record(total);
+        h.queue = queue;
+        h.timeline = timeline;
+        for (i, (sh, s)) in h.sinks.iter_mut().zip(&self.sinks).enumerate() {
+            sh.latency.record(self.sink_latency[i]);
+            sh.counters = s.counters();
+            if let Some(e) = self.sink_failed[i].take() {
+                sh.errors += 1;
+                sh.last_error = Some(e);
+            }
+        }
+        for e in &self.estimates {
+            if let Some(o) = h.objects.get_mut(e.object) {
+                o.state = Some(e.state);
+                o.quality = e.quality;
+                o.t_us = Some(e.t_us);
+            }
+        }
+    }
+}
