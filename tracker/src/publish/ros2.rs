@@ -468,7 +468,12 @@ mod tests {
             nanosec: 123_456_789,
         };
         let position = [1.0, -2.5, 0.125];
-        let orientation = [0.0, 0.0, 0.7071067811865476, 0.7071067811865476];
+        let orientation = [
+            0.0,
+            0.0,
+            std::f64::consts::FRAC_1_SQRT_2,
+            std::f64::consts::FRAC_1_SQRT_2,
+        ];
         let mut out = Vec::new();
         encode_pose_stamped(&mut out, stamp, "world", position, orientation);
 

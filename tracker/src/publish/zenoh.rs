@@ -445,7 +445,7 @@ impl ZenohPosePublisher {
         p.next_sequence += 1;
         p.publisher
             .put(self.buffer.as_slice())
-            .attachment(&attachment)
+            .attachment(attachment)
             .wait()
             .map_err(|e| format!("put on {:?}: {e}", p.key_expr))
     }
