@@ -5,6 +5,7 @@
 //! (`section.key`) and what is wrong. Relative paths are resolved against the directory of the configuration
 //! file (see [`Config::resolve_paths`]).
 
+use crate::publish::zenoh::ZenohConfig;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
@@ -103,9 +104,9 @@ pub struct Config {
     /// Which sinks are on.
     #[serde(default)]
     pub sinks: SinksConfig,
-    /// zenoh / ROS 2 publishing.
+    /// zenoh / ROS 2 publishing: session, topics, QoS (`sinks.zenoh` turns it on).
     #[serde(default)]
-    pub zenoh: ZenohSection,
+    pub zenoh: ZenohConfig,
     /// CAN publishing.
     #[serde(default)]
     pub can: CanSection,
@@ -318,37 +319,6 @@ impl Default for SinksConfig {
             zenoh: true,
             candump: true,
             socketcan: false,
-        }
-    }
-}
-
-/// `[zenoh]`: zenoh / ROS 2 (rmw_zenoh) session and topics.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct ZenohSection {
-    /// ROS domain id (the first key segment).
-    pub domain_id: u32,
-    /// Session mode: `peer` or `client`.
-    pub mode: String,
-    /// Endpoints to listen on (`tcp/127.0.0.1:0` = any free port on loopback).
-    pub listen: Vec<String>,
-    /// Endpoints to connect to when there (a zenoh router); never required.
-    pub connect: Vec<String>,
-    /// Multicast scouting (off by default, like rmw_zenoh).
-    pub multicast_scouting: bool,
-    /// Congestion control of pose samples: `drop` (never block) or `block`.
-    pub congestion_control: String,
-}
-
-impl Default for ZenohSection {
-    fn default() -> Self {
-        Self {
-            domain_id: 0,
-            mode: "peer".into(),
-            listen: vec!["tcp/127.0.0.1:0".into()],
-            connect: vec!["tcp/127.0.0.1:7447".into()],
-            multicast_scouting: false,
-            congestion_control: "drop".into(),
         }
     }
 }
@@ -590,23 +560,12 @@ impl Config {
         }
         let z = &self.zenoh;
         if self.sinks.zenoh {
-            if !matches!(z.mode.as_str(), "peer" | "client") {
-                return Err(bad(
-                    "zenoh.mode",
-                    format!("`{}` is not `peer` or `client`", z.mode),
-                ));
-            }
-            if !matches!(z.congestion_control.as_str(), "drop" | "block") {
-                return Err(bad(
-                    "zenoh.congestion_control",
-                    format!("`{}` is not `drop` or `block`", z.congestion_control),
-                ));
-            }
+            let n_listen = z.listen.len();
             for (i, e) in z.listen.iter().chain(z.connect.iter()).enumerate() {
-                let key = if i < z.listen.len() {
+                let key = if i < n_listen {
                     format!("zenoh.listen[{i}]")
                 } else {
-                    format!("zenoh.connect[{}]", i - z.listen.len())
+                    format!("zenoh.connect[{}]", i - n_listen)
                 };
                 if !e.contains('/') {
                     return Err(bad(
@@ -618,10 +577,7 @@ impl Config {
             if z.domain_id > 232 {
                 return Err(bad(
                     "zenoh.domain_id",
-                    format!(
-                        "{} is out of range: ROS domain ids are 0..=232",
-                        z.domain_id
-                    ),
+                    format!("{} is out of range: ROS domain ids are 0..=232", z.domain_id),
                 ));
             }
         }

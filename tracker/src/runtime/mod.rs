@@ -219,25 +219,28 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
     let (source, scene, timeline) = setup::build_source(config)?;
     let tracker = build_tracker(&config.tracker.method, &scene)?;
     let objects = tracker.objects().to_vec();
-    let (mut sinks, outputs) = setup::build_file_sinks(config)?;
-    let network = sinks::build_network_sinks(config, &objects, &outputs)?;
-    let outputs = OutputPaths {
-        candump: network.candump.clone().or(outputs.candump),
-        ..outputs
-    };
-    sinks.extend(network.sinks);
-    let sink_names: Vec<String> = sinks.iter().map(|s| s.name().to_string()).collect();
-    let health = Arc::new(Mutex::new(Health::new(&objects, &sink_names)));
-    let queue = Arc::new(IngestQueue::new(
-        config.queue.event_batches,
-        config.queue.batch_events,
-    ));
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .thread_name("eventtrack6d-rt")
         .enable_all()
         .build()
         .map_err(|e| RuntimeError::Thread(format!("cannot start the tokio runtime: {e}")))?;
+    let (mut sinks, outputs) = setup::build_file_sinks(config)?;
+    // zenoh first: it is what robots subscribe to, so it gets the earliest slot of every tick.
+    let network = sinks::build_network_sinks(config, &objects, &outputs, rt.handle())?;
+    let outputs = OutputPaths {
+        candump: network.candump.clone().or(outputs.candump),
+        ..outputs
+    };
+    let mut all: Vec<Box<dyn crate::publish::PoseSink>> = network.sinks;
+    all.append(&mut sinks);
+    let sinks = all;
+    let sink_names: Vec<String> = sinks.iter().map(|s| s.name().to_string()).collect();
+    let health = Arc::new(Mutex::new(Health::new(&objects, &sink_names)));
+    let queue = Arc::new(IngestQueue::new(
+        config.queue.event_batches,
+        config.queue.batch_events,
+    ));
     let parts = Parts {
         source,
         tracker,

@@ -3,9 +3,12 @@
 
 use super::config::Config;
 use super::setup::OutputPaths;
+use super::worker::SharedSink;
 use super::{RuntimeError, StatusPut};
-use crate::publish::PoseSink;
+use crate::publish::zenoh::ZenohPosePublisher;
+use crate::publish::{PoseSink, PublishError};
 use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 /// The network sinks of a run.
 #[derive(Default)]
@@ -18,20 +21,31 @@ pub struct NetworkSinks {
     pub candump: Option<PathBuf>,
 }
 
-/// Builds the zenoh and CAN sinks the configuration turns on.
+/// Builds the zenoh and CAN sinks the configuration turns on. A zenoh session that cannot open is an error (the
+/// configuration asked for it); `runtime` runs the SocketCAN writer task.
 pub fn build_network_sinks(
     config: &Config,
-    _objects: &[String],
+    objects: &[String],
     _outputs: &OutputPaths,
+    _runtime: &tokio::runtime::Handle,
 ) -> Result<NetworkSinks, RuntimeError> {
-    let out = NetworkSinks::default();
+    let mut out = NetworkSinks::default();
     if config.sinks.zenoh {
-        eprintln!(
-            "warning: zenoh publishing is not in this build yet; poses go to the other sinks"
-        );
-    }
-    if config.sinks.candump || config.sinks.socketcan {
-        eprintln!("warning: CAN publishing is not in this build yet; poses go to the other sinks");
+        // Stamps are the event camera's clock (offset 0): replayed and live poses carry their own time base.
+        let publisher = ZenohPosePublisher::new(&config.zenoh, objects, 0).map_err(|e| {
+            RuntimeError::Sink(PublishError::Transport {
+                sink: "zenoh".into(),
+                message: e.to_string(),
+            })
+        })?;
+        let shared = Arc::new(Mutex::new(publisher));
+        out.sinks.push(Box::new(SharedSink::new(shared.clone())));
+        out.status = Some(Box::new(move |json: &[u8]| {
+            shared
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .put_status(json)
+        }));
     }
     Ok(out)
 }
