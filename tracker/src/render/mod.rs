@@ -1,18 +1,23 @@
 //! Rendering of posed meshes into depth, normals, object mask and shaded intensity, for a full image or a region of
 //! interest with any pinhole intrinsics.
 //!
-//! [`Renderer`] is the interface; [`CpuRenderer`] the deterministic CPU rasteriser. A GPU backend implements the same
-//! trait: meshes are registered once (uploaded) and referred to by [`MeshId`]; every render writes into a caller-owned
+//! [`Renderer`] is the interface; [`CpuRenderer`] the deterministic CPU rasteriser; `GpuRenderer` (cargo feature
+//! `gpu`, on by default) the same outputs on `wgpu` over Vulkan. [`create_renderer`] picks one by [`RendererKind`]
+//! (as a configuration file names it). Every backend implements the same trait: meshes are registered once (uploaded) and referred to by [`MeshId`]; every render writes into a caller-owned
 //! [`RenderTarget`] whose buffers are reused, so rendering per tick does not allocate in steady state.
 //!
 //! Rendering a region of interest is rendering with the ROI's intrinsics ([`PinholeCamera::crop`]);
 //! [`Renderer::render_roi`] does exactly that.
 
 mod cpu;
+#[cfg(feature = "gpu")]
+mod gpu;
 mod scene;
 mod target;
 
 pub use cpu::CpuRenderer;
+#[cfg(feature = "gpu")]
+pub use gpu::GpuRenderer;
 pub use scene::{BackgroundMesh, Lighting, MASK_BACKGROUND, MASK_EMPTY, Scene, SceneObject};
 pub use target::RenderTarget;
 
@@ -62,6 +67,66 @@ pub enum RenderError {
     /// A backend-specific failure (e.g. a GPU device error).
     #[error("renderer backend failed: {0}")]
     Backend(String),
+    /// The requested backend cannot run here (no Vulkan adapter, or built without the `gpu` feature).
+    #[error("renderer unavailable: {0}")]
+    Unavailable(String),
+}
+
+/// Which renderer backend to use; in configuration files `"cpu"` or `"gpu"`.
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum RendererKind {
+    /// [`CpuRenderer`]: deterministic, no device needed (the default).
+    #[default]
+    Cpu,
+    /// `GpuRenderer`: `wgpu` over Vulkan (a GPU, or Mesa's lavapipe on a CPU); needs the `gpu` feature.
+    Gpu,
+}
+
+/// A renderer name that is neither `cpu` nor `gpu`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown renderer `{0}`: expected `cpu` or `gpu`")]
+pub struct ParseRendererKindError(pub String);
+
+impl std::str::FromStr for RendererKind {
+    type Err = ParseRendererKindError;
+
+    /// Parses `cpu` or `gpu` (case-insensitive, surrounding blanks ignored).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "cpu" => Ok(Self::Cpu),
+            "gpu" => Ok(Self::Gpu),
+            _ => Err(ParseRendererKindError(s.to_owned())),
+        }
+    }
+}
+
+impl std::fmt::Display for RendererKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Cpu => "cpu",
+            Self::Gpu => "gpu",
+        })
+    }
+}
+
+/// Creates a renderer of the given kind, ready to be moved to the tracker's thread.
+///
+/// `Gpu` fails with [`RenderError::Unavailable`] when there is no Vulkan adapter (install a driver, e.g. Debian's
+/// `mesa-vulkan-drivers` for lavapipe) or when this build lacks the `gpu` feature.
+pub fn create_renderer(kind: RendererKind) -> Result<Box<dyn Renderer + Send>, RenderError> {
+    match kind {
+        RendererKind::Cpu => Ok(Box::new(CpuRenderer::new())),
+        #[cfg(feature = "gpu")]
+        RendererKind::Gpu => Ok(Box::new(GpuRenderer::new()?)),
+        #[cfg(not(feature = "gpu"))]
+        RendererKind::Gpu => Err(RenderError::Unavailable(
+            "the GPU renderer was not built: rebuild with the `gpu` cargo feature of eventtrack6d (on by default)"
+                .into(),
+        )),
+    }
 }
 
 /// A renderer of posed triangle meshes. Object-safe: the tracker may hold a `Box<dyn Renderer>`.

@@ -1,6 +1,6 @@
 //! The deterministic CPU rasteriser.
 
-mod prepared;
+pub(super) mod prepared;
 mod raster;
 
 use super::{

@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3A};
 use std::sync::Arc;
 
 /// Rec. 709 luminance of a linear RGB colour.
-pub(super) fn luminance(c: [f32; 3]) -> f32 {
+pub(in crate::render) fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
@@ -95,7 +95,7 @@ pub(super) struct PreparedMesh {
 /// Decides whether back faces can be culled: only for closed, consistently oriented surfaces (every edge, after
 /// welding identical positions, used exactly once in each direction). Returns the sign of screen-space area to cull
 /// (see [`PreparedMesh::cull`]); outward winding (positive enclosed volume) culls positive area.
-fn back_face_cull_sign(positions: &[Vec3A], triangles: &[[u32; 3]]) -> i8 {
+pub(in crate::render) fn back_face_cull_sign(positions: &[Vec3A], triangles: &[[u32; 3]]) -> i8 {
     use std::collections::HashMap;
     let mut weld: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
     let ids: Vec<u32> = positions
