@@ -3,6 +3,7 @@
 //! A sink never blocks the caller for long and never panics on a transport failure: failures are counted in
 //! [`SinkCounters`] and reported, and the sink carries on (retrying where the transport allows).
 
+pub mod can;
 pub mod csv;
 pub mod ros2;
 pub mod zenoh;
