@@ -718,6 +718,8 @@ mod tests {
             0xA0, 0xA1, 0xA2, 0xA3, 0xA4, 0xA5, 0xA6, 0xA7, 0xA8, 0xA9, 0xAA, 0xAB, 0xAC, 0xAD,
             0xAE, 0xAF,
         ];
+        // zenoh-ext's serializer (eclipse-zenoh 1.10.2, `z_serialize((Int64(1), Int64(0x0102030405060708),
+        // [UInt8(0xA0), ..., UInt8(0xAF)]))`) gives exactly these 33 bytes.
         assert_eq!(bytes, expected);
         assert_eq!(Attachment::from_bytes(&bytes).unwrap(), a);
         assert_eq!(
