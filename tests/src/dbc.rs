@@ -46,6 +46,8 @@ pub struct SignalValue {
     pub raw: i128,
     /// `raw * factor + offset`.
     pub physical: f64,
+    /// The signal's factor (its resolution).
+    pub factor: f64,
 }
 
 /// A DBC database reduced to what decoding needs.
@@ -179,6 +181,7 @@ impl DbcDecoder {
                 SignalValue {
                     raw,
                     physical: raw as f64 * s.factor + s.offset,
+                    factor: s.factor,
                 },
             );
         }
@@ -221,6 +224,8 @@ pub struct DbcPose {
     pub quality: f64,
     /// State code.
     pub state: u8,
+    /// Resolution (DBC factor) of the position, quaternion and quality signals the pose came from.
+    pub resolution: [f64; 3],
 }
 
 /// Reassembles poses from frames using only the DBC: checks each frame's CRC (id low byte, id high byte, bytes 1..)
@@ -305,6 +310,7 @@ impl DbcPoseReader {
 
 fn pose_from(object: usize, counter: u8, s: &BTreeMap<String, SignalValue>) -> DbcPose {
     let p = |n: &str| s.get(n).map_or(f64::NAN, |v| v.physical);
+    let f = |n: &str| s.get(n).map_or(f64::NAN, |v| v.factor);
     let time = s.get("TimeUs").map_or(0, |v| v.raw);
     DbcPose {
         object,
@@ -315,6 +321,7 @@ fn pose_from(object: usize, counter: u8, s: &BTreeMap<String, SignalValue>) -> D
         quaternion: [p("QuatX"), p("QuatY"), p("QuatZ"), p("QuatW")],
         quality: p("Quality"),
         state: s.get("State").map_or(255, |v| v.raw as u8),
+        resolution: [f("PosX"), f("QuatW"), f("Quality")],
     }
 }
 
@@ -335,4 +342,149 @@ pub fn parse_candump_line(line: &str) -> Option<(u32, bool, Vec<u8>)> {
         .map(|i| u8::from_str_radix(&hex[2 * i..2 * i + 2], 16).ok())
         .collect::<Option<_>>()?;
     Some((id, fd, data))
+}
+
+/// How the poses of a candump log compare with the pose CSV of the same run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CanCsvMatch {
+    /// Poses assembled from the log through the DBC.
+    pub can_poses: usize,
+    /// Rows in the CSV.
+    pub csv_rows: usize,
+    /// CAN poses matched to a CSV row (same object, same time) within the DBC resolution.
+    pub matched: usize,
+    /// Largest position difference, metres.
+    pub max_position_error: f64,
+    /// Largest quaternion component difference (after making w >= 0).
+    pub max_quaternion_error: f64,
+}
+
+/// Decodes `candump_log` through the DBC at `dbc` (independently of the tracker: own candump line parser, generic
+/// signal extraction, own CRC) and matches every pose with the row of `pose_csv` (`t_us,object,x,y,z,qx,qy,qz,qw,
+/// quality,state`, object by name; `objects` gives the names in index order) with the same object and time (full
+/// `t_us` for FD, its low 32 bits for classic). Errors: unreadable files, frames the DBC does not describe, bad CRCs,
+/// a CAN pose without a CSV row, or any field outside the DBC's resolution.
+pub fn check_candump_against_csv(
+    dbc: &std::path::Path,
+    candump_log: &std::path::Path,
+    pose_csv: &std::path::Path,
+    objects: &[String],
+) -> Result<CanCsvMatch, String> {
+    let mut reader = DbcPoseReader::new(DbcDecoder::from_file(dbc)?);
+    let log = std::fs::read_to_string(candump_log)
+        .map_err(|e| format!("{}: {e}", candump_log.display()))?;
+    let mut poses = Vec::new();
+    for (i, line) in log
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
+        let (id, fd, data) =
+            parse_candump_line(line).ok_or_else(|| format!("candump line {}: {line}", i + 1))?;
+        if let Some(p) = reader
+            .push(id, fd, &data)
+            .map_err(|e| format!("candump line {}: {e}", i + 1))?
+        {
+            poses.push(p);
+        }
+    }
+    if reader.bad_crc > 0 {
+        return Err(format!("{} frames with a bad CRC", reader.bad_crc));
+    }
+    let csv =
+        std::fs::read_to_string(pose_csv).map_err(|e| format!("{}: {e}", pose_csv.display()))?;
+    let mut rows: HashMap<(usize, u32), Vec<[f64; 9]>> = HashMap::new();
+    let mut states: HashMap<(usize, u32), u8> = HashMap::new();
+    let mut csv_rows = 0;
+    for (i, line) in csv
+        .lines()
+        .enumerate()
+        .skip(1)
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
+        let f: Vec<&str> = line.split(',').collect();
+        let bad = || format!("{} line {}: {line}", pose_csv.display(), i + 1);
+        if f.len() != 11 {
+            return Err(bad());
+        }
+        let t_us: i64 = f[0].parse().map_err(|_| bad())?;
+        let object = objects.iter().position(|o| o == f[1]).ok_or_else(bad)?;
+        let mut v = [0.0; 9];
+        for (k, x) in f[2..10].iter().enumerate() {
+            v[k] = x.parse().map_err(|_| bad())?;
+        }
+        v[8] = t_us as f64;
+        let state = match f[10] {
+            "tracking" => 0,
+            "degraded" => 1,
+            "lost" => 2,
+            _ => return Err(bad()),
+        };
+        rows.entry((object, t_us as u32)).or_default().push(v);
+        states.insert((object, t_us as u32), state);
+        csv_rows += 1;
+    }
+    let mut m = CanCsvMatch {
+        can_poses: poses.len(),
+        csv_rows,
+        matched: 0,
+        max_position_error: 0.0,
+        max_quaternion_error: 0.0,
+    };
+    for p in &poses {
+        let key = (p.object, p.t_us_low32);
+        let row = rows.get(&key).and_then(|r| r.first()).ok_or_else(|| {
+            format!(
+                "CAN pose of object {} at t_us low32 {} has no CSV row",
+                p.object, p.t_us_low32
+            )
+        })?;
+        if let Some(t) = p.t_us {
+            if t as f64 != row[8] {
+                return Err(format!(
+                    "object {}: FD time {t} vs CSV {}",
+                    p.object, row[8]
+                ));
+            }
+        }
+        let [pos_res, quat_res, quality_res] = p.resolution;
+        for k in 0..3 {
+            let e = (p.position[k] - row[k]).abs();
+            m.max_position_error = m.max_position_error.max(e);
+            if e > pos_res / 2.0 + 1e-9 {
+                return Err(format!(
+                    "object {} t {}: position {k} {} vs CSV {}",
+                    p.object, row[8], p.position[k], row[k]
+                ));
+            }
+        }
+        let sign = if row[6] < 0.0 { -1.0 } else { 1.0 };
+        for k in 0..4 {
+            let e = (p.quaternion[k] - sign * row[3 + k]).abs();
+            m.max_quaternion_error = m.max_quaternion_error.max(e);
+            if e > quat_res * 1.01 {
+                return Err(format!(
+                    "object {} t {}: quaternion {k} {} vs CSV {}",
+                    p.object,
+                    row[8],
+                    p.quaternion[k],
+                    row[3 + k]
+                ));
+            }
+        }
+        if (p.quality - row[7]).abs() > quality_res / 2.0 + 1e-6 {
+            return Err(format!(
+                "object {} t {}: quality {} vs CSV {}",
+                p.object, row[8], p.quality, row[7]
+            ));
+        }
+        if states.get(&key) != Some(&p.state) {
+            return Err(format!(
+                "object {} t {}: state {} differs from the CSV",
+                p.object, row[8], p.state
+            ));
+        }
+        m.matched += 1;
+    }
+    Ok(m)
 }

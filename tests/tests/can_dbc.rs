@@ -189,3 +189,51 @@ fn dbc_reader_rejects_corrupt_and_mixed_frames() {
     };
     assert_eq!(s.raw(&[0xAB, 0xC0]), Some(0xABC));
 }
+
+/// The end-to-end helper on the real file sinks: the same ticks through the CSV sink and the candump sink, then the
+/// log decoded through the DBC matches the CSV.
+#[test]
+fn candump_log_matches_pose_csv_through_the_dbc() {
+    for fd in [false, true] {
+        let dir = tempfile::tempdir().unwrap();
+        let (log, csv) = (dir.path().join("can.log"), dir.path().join("poses.csv"));
+        let objects = 3;
+        let names: Vec<String> = (0..objects).map(|i| format!("obj{i}")).collect();
+        let mut can =
+            CandumpSink::create(&log, "can0", PoseEncoder { base_id: 0x300, fd }).unwrap();
+        let mut csv_sink = tracker::publish::csv::CsvPoseSink::create(&csv).unwrap();
+        let data = poses(40, objects);
+        for (tick, ests) in &data {
+            let tp = TickPoses {
+                tick,
+                estimates: ests,
+                objects: &names,
+                decoded_at: Instant::now(),
+            };
+            can.publish(&tp).unwrap();
+            csv_sink.publish(&tp).unwrap();
+        }
+        can.flush().unwrap();
+        csv_sink.flush().unwrap();
+        let dbc = Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/can/eventtrack6d.dbc");
+        let m =
+            eventtrack6d_tests::dbc::check_candump_against_csv(&dbc, &log, &csv, &names).unwrap();
+        assert_eq!((m.can_poses, m.csv_rows, m.matched), (120, 120, 120));
+        assert!(
+            m.max_position_error > 0.0,
+            "fixed point should differ from f64 somewhere"
+        );
+
+        // A corrupted CSV value beyond the resolution is caught.
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        let mut f: Vec<String> = lines[5].split(',').map(str::to_string).collect();
+        let x: f64 = f[2].parse().unwrap();
+        f[2] = (x + 1e-4).to_string();
+        lines[5] = f.join(",");
+        std::fs::write(&csv, lines.join("\n")).unwrap();
+        let err = eventtrack6d_tests::dbc::check_candump_against_csv(&dbc, &log, &csv, &names)
+            .unwrap_err();
+        assert!(err.contains("position 0"), "{err}");
+    }
+}
