@@ -5,6 +5,7 @@
 //! (`section.key`) and what is wrong. Relative paths are resolved against the directory of the configuration
 //! file (see [`Config::resolve_paths`]).
 
+use crate::publish::can::CanConfig;
 use crate::publish::zenoh::ZenohConfig;
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -107,9 +108,9 @@ pub struct Config {
     /// zenoh / ROS 2 publishing: session, topics, QoS (`sinks.zenoh` turns it on).
     #[serde(default)]
     pub zenoh: ZenohConfig,
-    /// CAN publishing.
+    /// CAN publishing (candump log relative to `output.dir`, SocketCAN interface, classic or FD).
     #[serde(default)]
-    pub can: CanSection,
+    pub can: CanConfig,
 }
 
 /// Kind of sensor source.
@@ -306,10 +307,6 @@ pub struct SinksConfig {
     pub csv: bool,
     /// zenoh / ROS 2 publishing (`[zenoh]`): poses, status, liveliness.
     pub zenoh: bool,
-    /// CAN frames to `output.dir/poses.candump.log` (candump `-l` format).
-    pub candump: bool,
-    /// CAN frames on a SocketCAN interface (`[can]`).
-    pub socketcan: bool,
 }
 
 impl Default for SinksConfig {
@@ -317,27 +314,6 @@ impl Default for SinksConfig {
         Self {
             csv: true,
             zenoh: true,
-            candump: true,
-            socketcan: false,
-        }
-    }
-}
-
-/// `[can]`: CAN publishing.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct CanSection {
-    /// SocketCAN interface name.
-    pub interface: String,
-    /// CAN FD (one frame per pose) instead of classic CAN (several 8-byte frames per pose).
-    pub fd: bool,
-}
-
-impl Default for CanSection {
-    fn default() -> Self {
-        Self {
-            interface: "can0".into(),
-            fd: false,
         }
     }
 }
@@ -577,20 +553,23 @@ impl Config {
             if z.domain_id > 232 {
                 return Err(bad(
                     "zenoh.domain_id",
-                    format!("{} is out of range: ROS domain ids are 0..=232", z.domain_id),
+                    format!(
+                        "{} is out of range: ROS domain ids are 0..=232",
+                        z.domain_id
+                    ),
                 ));
             }
         }
-        let c = &self.can;
-        if self.sinks.socketcan && (c.interface.is_empty() || c.interface.len() > 15) {
-            return Err(bad(
-                "can.interface",
-                format!(
-                    "`{}` is not a network interface name (1 to 15 characters)",
-                    c.interface
-                ),
-            ));
-        }
+        let n_objects = self.objects.len().max(1);
+        self.can.validate(n_objects).map_err(|e| {
+            let (key, message) = match e {
+                crate::publish::can::CanError::Config { key, message } => {
+                    (format!("can.{key}"), message)
+                }
+                other => ("can".to_string(), other.to_string()),
+            };
+            bad(&key, message)
+        })?;
         Ok(())
     }
 
@@ -702,7 +681,8 @@ mod tests {
         let c = Config::builtin_default().unwrap();
         assert_eq!(c.source.kind, SourceKind::Demo);
         assert_eq!(c.source.pace, Pace::Realtime);
-        assert!(c.sinks.zenoh && c.sinks.candump && c.sinks.csv && !c.sinks.socketcan);
+        assert!(c.sinks.zenoh && c.sinks.csv && c.can.enabled);
+        assert!(c.can.candump_log.is_some() && c.can.interface.is_none());
         assert_eq!(c.tracker.method, "static");
     }
 
@@ -805,5 +785,26 @@ mod tests {
         assert_eq!(key_at(t, t.find("b =").unwrap()), (3, "x.b".into()));
         assert_eq!(key_at(t, t.find("c =").unwrap() + 4), (5, "y.z.c".into()));
         assert_eq!(key_at(t, 0), (1, "a".into()));
+    }
+
+    #[test]
+    fn shipped_configurations_load_and_the_rig_says_live_is_not_there_yet() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../config");
+        let demo = Config::load(&root.join("default.toml")).unwrap();
+        assert_eq!(demo.source.kind, SourceKind::Demo);
+        let rig = Config::load(&root.join("rig-evk4-d435i.toml")).unwrap();
+        assert_eq!(rig.source.kind, SourceKind::Live);
+        assert_eq!(rig.can.interface.as_deref(), Some("can0"));
+        assert_eq!(rig.objects[0].name, "box");
+        let e = crate::runtime::setup::build_source(&rig)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("live EVK4 source not implemented yet"), "{e}");
+        let e = crate::runtime::setup::build_source(&demo)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("eventtrack6d demo"), "{e}");
     }
 }

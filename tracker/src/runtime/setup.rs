@@ -205,7 +205,7 @@ pub fn build_file_sinks(
 ) -> Result<(Vec<Box<dyn PoseSink>>, OutputPaths), RuntimeError> {
     let mut sinks: Vec<Box<dyn PoseSink>> = Vec::new();
     let mut paths = OutputPaths::default();
-    if config.sinks.csv || config.sinks.candump {
+    if config.sinks.csv || (config.can.enabled && config.can.candump_log.is_some()) {
         std::fs::create_dir_all(&config.output.dir).map_err(|e| {
             RuntimeError::Output(format!(
                 "output.dir {}: cannot create: {e}",

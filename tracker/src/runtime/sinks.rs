@@ -27,7 +27,7 @@ pub fn build_network_sinks(
     config: &Config,
     objects: &[String],
     _outputs: &OutputPaths,
-    _runtime: &tokio::runtime::Handle,
+    runtime: &tokio::runtime::Handle,
 ) -> Result<NetworkSinks, RuntimeError> {
     let mut out = NetworkSinks::default();
     if config.sinks.zenoh {
@@ -46,6 +46,30 @@ pub fn build_network_sinks(
                 .unwrap_or_else(|p| p.into_inner())
                 .put_status(json)
         }));
+    }
+    if config.can.enabled {
+        let mut can = config.can.clone();
+        if let Some(log) = &mut can.candump_log
+            && log.is_relative()
+        {
+            *log = config.output.dir.join(&*log);
+        }
+        can.validate(objects.len()).map_err(|e| {
+            RuntimeError::Sink(PublishError::Transport {
+                sink: "can".into(),
+                message: e.to_string(),
+            })
+        })?;
+        let (sinks, errors) = can.build_sinks(runtime);
+        // A missing CAN interface (or an unwritable log) is reported and the other sinks carry on.
+        for e in errors {
+            eprintln!("warning: {e}");
+        }
+        out.candump = can.candump_log.clone().filter(|p| {
+            let name = format!("candump:{}", p.display());
+            sinks.iter().any(|s| s.name() == name)
+        });
+        out.sinks.extend(sinks);
     }
     Ok(out)
 }

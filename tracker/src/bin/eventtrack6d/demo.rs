@@ -48,7 +48,11 @@ pub struct DemoArgs {
 /// OVERLAY HOOK (the lead's overlay renderer plugs in here): write an image strip of the tracked object drawn at
 /// the published poses over the events of a few ticks into `out/overlay.png`, and return its path. Until the
 /// renderer lands nothing is written.
-fn write_overlay_strip(_recording: &Path, _poses_csv: &Path, _out: &Path) -> Result<Option<PathBuf>> {
+fn write_overlay_strip(
+    _recording: &Path,
+    _poses_csv: &Path,
+    _out: &Path,
+) -> Result<Option<PathBuf>> {
     Ok(None)
 }
 
@@ -91,7 +95,11 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     eprintln!(
         "replaying {} {} through the runtime (tracker `{}`); Ctrl-C stops",
         recording.display(),
-        if args.fast { "as fast as possible" } else { "in real time" },
+        if args.fast {
+            "as fast as possible"
+        } else {
+            "in real time"
+        },
         config.tracker.method
     );
     let summary = session::execute(&config, expected)?;
@@ -105,7 +113,10 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         }
     }
     if let Some(log) = &summary.outputs.candump {
-        println!("CAN frames:      {} (decode with config/can/eventtrack6d.dbc)", log.display());
+        println!(
+            "CAN frames:      {} (decode with config/can/eventtrack6d.dbc)",
+            log.display()
+        );
     }
     Ok(())
 }

@@ -87,8 +87,15 @@ pub fn ensure_sequence(d: &DemoConfig, cache: &Path) -> Result<PathBuf> {
     let start = Instant::now();
     let status = Command::new(&exe)
         .arg("generate")
-        .args(["--object", &d.object, "--motion", &d.motion, "--speed", &d.speed])
-        .args(["--seconds", &d.seconds.to_string(), "--seed", &d.seed.to_string()])
+        .args([
+            "--object", &d.object, "--motion", &d.motion, "--speed", &d.speed,
+        ])
+        .args([
+            "--seconds",
+            &d.seconds.to_string(),
+            "--seed",
+            &d.seed.to_string(),
+        ])
         .arg("--out")
         .arg(&partial)
         .status()
@@ -97,7 +104,8 @@ pub fn ensure_sequence(d: &DemoConfig, cache: &Path) -> Result<PathBuf> {
         bail!("`{} generate` failed ({status})", exe.display());
     }
     if dir.exists() {
-        std::fs::remove_dir_all(&dir).with_context(|| format!("cannot replace {}", dir.display()))?;
+        std::fs::remove_dir_all(&dir)
+            .with_context(|| format!("cannot replace {}", dir.display()))?;
     }
     std::fs::rename(&partial, &dir)
         .with_context(|| format!("cannot move {} to {}", partial.display(), dir.display()))?;

@@ -59,7 +59,10 @@ pub fn expected_ticks(rec: &Recording) -> Option<u64> {
 }
 
 /// ADD-S / ADD AUC and AR (percent, 120 Hz) of each object of `poses_csv` against `recording`'s ground truth.
-pub fn accuracy(recording: &Path, poses_csv: &Path) -> Result<Vec<(String, tracker::eval::Summary)>> {
+pub fn accuracy(
+    recording: &Path,
+    poses_csv: &Path,
+) -> Result<Vec<(String, tracker::eval::Summary)>> {
     let rec = Recording::open(recording)?;
     let text = std::fs::read_to_string(poses_csv)
         .with_context(|| format!("cannot read {}", poses_csv.display()))?;
@@ -76,9 +79,7 @@ pub fn accuracy(recording: &Path, poses_csv: &Path) -> Result<Vec<(String, track
 
 /// Prints the accuracy table.
 pub fn print_accuracy(rows: &[(String, tracker::eval::Summary)], method: &str) {
-    println!(
-        "accuracy ({method}, every 120 Hz tick, AUC to 0.1 x diameter, percent):"
-    );
+    println!("accuracy ({method}, every 120 Hz tick, AUC to 0.1 x diameter, percent):");
     for (o, s) in rows {
         println!(
             "  {o:<14} ADD-S {:6.2}  ADD {:6.2}  AR {:6.2}  ({} ticks)",
