@@ -161,7 +161,8 @@ fn is_bus_off(e: &io::Error) -> bool {
 }
 
 impl SocketCanSink {
-    /// Opens `iface` (classic or FD per `encoder.fd`) and spawns the writer on `runtime`.
+    /// Opens `iface` (classic or FD per `encoder.fd`) and spawns the writer on `runtime`, which must have IO and
+    /// time enabled (`enable_all`).
     ///
     /// Fails with [`CanError::NoSuchInterface`] when the interface does not exist and [`CanError::NoCanSupport`]
     /// when the kernel has no CAN sockets; the caller reports it and carries on with its other sinks.
@@ -184,14 +185,11 @@ impl SocketCanSink {
             let _guard = runtime.enter();
             opener.open().map_err(|source| {
                 const EAFNOSUPPORT: i32 = 97;
-                const ENODEV: i32 = 19;
+                // The interface exists (checked above): ENODEV here means it is not a CAN device.
                 match source.raw_os_error() {
                     Some(EAFNOSUPPORT) => CanError::NoCanSupport {
                         iface: iface.to_string(),
                         source,
-                    },
-                    Some(ENODEV) => CanError::NoSuchInterface {
-                        iface: iface.to_string(),
                     },
                     _ => CanError::Open {
                         iface: iface.to_string(),
@@ -311,7 +309,15 @@ impl Drop for SocketCanSink {
     }
 }
 
-fn note_error(name: &str, shared: &Shared, message: String, bus_off: bool, count_write: bool) {
+/// Records a failure; `reopen`: the socket is dropped and will be reopened (not for a full transmit queue).
+fn note_error(
+    name: &str,
+    shared: &Shared,
+    message: String,
+    bus_off: bool,
+    count_write: bool,
+    reopen: bool,
+) {
     let mut h = lock(&shared.health);
     if count_write {
         h.write_errors += 1;
@@ -320,7 +326,9 @@ fn note_error(name: &str, shared: &Shared, message: String, bus_off: bool, count
         h.bus_off += 1;
     }
     let first = h.connected || h.last_error.is_none();
-    h.connected = false;
+    if reopen {
+        h.connected = false;
+    }
     if first {
         eprintln!(
             "warning: {name}: {message}; poses are counted as failed and the socket is reopened with backoff"
@@ -367,6 +375,7 @@ async fn writer<O: TransportOpener>(
                         format!("reopen failed: {e}"),
                         is_bus_off(&e),
                         false,
+                        true,
                     );
                     if shared.closed.load(Ordering::Acquire) {
                         return;
@@ -402,9 +411,17 @@ async fn writer<O: TransportOpener>(
                 const ENOBUFS: i32 = 105;
                 shared.failed.fetch_add(1, Ordering::Relaxed);
                 let bus_off = is_bus_off(&e);
-                note_error(&name, &shared, format!("write failed: {e}"), bus_off, true);
-                if e.raw_os_error() != Some(ENOBUFS) {
-                    // Anything but a full transmit queue: reopen the socket.
+                // Anything but a full transmit queue: drop the socket and reopen it.
+                let reopen = e.raw_os_error() != Some(ENOBUFS);
+                note_error(
+                    &name,
+                    &shared,
+                    format!("write failed: {e}"),
+                    bus_off,
+                    true,
+                    reopen,
+                );
+                if reopen {
                     transport = None;
                 }
                 if shared.closed.load(Ordering::Acquire) {

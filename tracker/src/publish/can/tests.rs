@@ -644,6 +644,25 @@ fn socket_sink_says_interface_is_missing() {
     assert_eq!(errors.len(), 1);
 }
 
+#[test]
+fn socket_sink_on_a_non_can_interface_is_an_error_not_a_panic() {
+    // `lo` exists everywhere but is no CAN interface (and this kernel may have no CAN sockets at all).
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    for fd in [false, true] {
+        let err = SocketCanSink::open("lo", PoseEncoder { base_id: 0x300, fd }, 8, rt.handle())
+            .err()
+            .expect("lo is not a CAN interface");
+        let msg = err.to_string();
+        assert!(
+            msg.contains("`lo`") && msg.contains("other sinks carry on"),
+            "{msg}"
+        );
+    }
+}
+
 /// A fake bus: records frames, fails the writes whose (0-based) number is in `fail`, can be held (blocked).
 #[derive(Clone)]
 struct FakeBus {
