@@ -335,7 +335,7 @@ pub fn parse_candump_line(line: &str) -> Option<(u32, bool, Vec<u8>)> {
         Some(r) => (true, r.get(1..)?),
         None => (false, rest),
     };
-    if hex.len() % 2 != 0 {
+    if hex.len() % 2 != 0 || !hex.is_ascii() {
         return None;
     }
     let data = (0..hex.len() / 2)
