@@ -6,7 +6,9 @@
 //! file by the independent DBC reader, must give the same poses within the fixed-point resolution.
 
 use drivers::recording::Recording;
-use eventtrack6d_tests::dbc::{DbcDecoder, DbcPoseReader, parse_candump_line};
+use eventtrack6d_tests::dbc::{
+    DbcDecoder, DbcPoseReader, check_candump_against_csv, parse_candump_line,
+};
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
@@ -215,10 +217,9 @@ candump_log = "poses.candump.log"
     );
 
     // CAN: the candump log through the DBC file with the independent reader.
-    let dbc = DbcDecoder::from_file(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/can/eventtrack6d.dbc"),
-    )
-    .unwrap();
+    let dbc_path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/can/eventtrack6d.dbc");
+    let dbc = DbcDecoder::from_file(&dbc_path).unwrap();
     let mut reader = DbcPoseReader::new(dbc);
     let log = summary.outputs.candump.clone().expect("candump log");
     let text = std::fs::read_to_string(&log).unwrap();
@@ -252,4 +253,7 @@ candump_log = "poses.candump.log"
     }
     assert_eq!(reader.bad_crc, 0);
     assert_eq!(can_poses, ticks.len(), "poses reassembled from CAN frames");
+    // The CAN module's own end-to-end check (same DBC reader, every field within its resolution) agrees.
+    let m = check_candump_against_csv(&dbc_path, &log, &csv_path, &summary.objects).unwrap();
+    assert_eq!(m.matched, ticks.len());
 }

@@ -211,3 +211,109 @@ impl Worker {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::publish::{PublishError, SinkCounters};
+    use crate::runtime::health::Health;
+    use crate::track::HoldPoseTracker;
+    use drivers::event::CdEvent;
+    use drivers::timeline::ideal_edges;
+    use nalgebra::Isometry3;
+
+    /// Records tick indices and depth flags; fails every 5th tick to exercise error counting.
+    struct Probe {
+        seen: Arc<Mutex<Vec<(u64, Option<u64>, usize)>>>,
+        counters: SinkCounters,
+    }
+
+    impl PoseSink for Probe {
+        fn name(&self) -> &str {
+            "probe"
+        }
+        fn publish(&mut self, p: &TickPoses<'_>) -> Result<(), PublishError> {
+            self.seen
+                .lock()
+                .unwrap()
+                .push((p.tick.index, p.tick.depth_frame, p.estimates.len()));
+            if p.tick.index % 5 == 4 {
+                self.counters.failed += 1;
+                return Err(PublishError::Transport {
+                    sink: "probe".into(),
+                    message: "injected".into(),
+                });
+            }
+            self.counters.published += p.estimates.len() as u64;
+            Ok(())
+        }
+        fn counters(&self) -> SinkCounters {
+            self.counters
+        }
+    }
+
+    #[test]
+    fn edges_become_ticks_for_every_sink_with_latency_and_errors_counted() {
+        let cfg = TimelineConfig::default();
+        let queue = Arc::new(IngestQueue::new(8, 16));
+        let objects = vec!["a".to_string(), "b".to_string()];
+        let health = Arc::new(Mutex::new(Health::new(&objects, &["probe".into()])));
+        let seen = Arc::new(Mutex::new(Vec::new()));
+        let tracker = HoldPoseTracker::new(
+            objects
+                .iter()
+                .map(|o| (o.clone(), Isometry3::identity()))
+                .collect(),
+        );
+        let sink = Probe {
+            seen: seen.clone(),
+            counters: SinkCounters::default(),
+        };
+        let worker = Worker::new(
+            Box::new(tracker),
+            vec![Box::new(sink)],
+            cfg,
+            queue.clone(),
+            health.clone(),
+        );
+        let thread = std::thread::spawn(move || worker.run());
+        for e in ideal_edges(&cfg, 1000, 12) {
+            let mut b = queue.buffer();
+            b.push(CdEvent {
+                t_us: e.t_us - 1,
+                ..CdEvent::default()
+            });
+            queue.push(Ingest::Events(b));
+            queue.push(Ingest::Trigger {
+                edge: e,
+                decoded_at: Instant::now(),
+            });
+        }
+        queue.push(Ingest::End);
+        let end = thread.join().unwrap();
+        assert!(end.flush_errors.is_empty());
+        let seen = seen.lock().unwrap().clone();
+        // 12 pulses -> 12 ticks, in order, depth frames on every 4th, one estimate per object.
+        assert_eq!(seen.len(), 12);
+        for (i, (index, depth, n)) in seen.iter().enumerate() {
+            assert_eq!(*index, i as u64);
+            assert_eq!(*depth, (i % 4 == 0).then_some(i as u64 / 4));
+            assert_eq!(*n, 2);
+        }
+        let h = health.lock().unwrap();
+        assert_eq!((h.ticks, h.poses), (12, 24));
+        // The producer outruns the 8-batch queue: whatever was not tracked was dropped and counted.
+        assert_eq!(h.events + h.queue.dropped_events, 24);
+        assert_eq!(h.queue.batches, 24);
+        assert_eq!(h.latency.count(), 12);
+        assert_eq!(h.sinks[0].latency.count(), 12);
+        assert_eq!(h.sinks[0].errors, 2);
+        assert_eq!(h.sinks[0].counters.failed, 2);
+        assert_eq!(h.sinks[0].last_error.as_deref(), Some("probe: injected"));
+        assert_eq!(
+            h.objects[1].state,
+            Some(crate::track::TrackingState::Tracking)
+        );
+        assert_eq!(h.timeline.pulses, 12);
+    }
+}
