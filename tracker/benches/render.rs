@@ -1,5 +1,6 @@
-//! CPU renderer throughput: the tracker's per-tick ROI render (160x160 crop of 1.2 x diameter around a ~5k-triangle
-//! textured object) and a 1280x720 full frame with a textured background plane.
+//! Renderer throughput, CPU and (with the `gpu` feature) wgpu backends: the tracker's per-tick ROI render (160x160 crop
+//! of 1.2 x diameter around a ~5k-triangle textured object) and a 1280x720 full frame with a textured background plane.
+//! A GPU render includes waiting for the device and reading the image back into the `RenderTarget`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -7,7 +8,9 @@ use std::hint::black_box;
 use std::sync::Arc;
 use tracker::geometry::{PinholeCamera, Roi};
 use tracker::mesh::{Material, Mesh, MeshParts, Texture};
-use tracker::render::{BackgroundMesh, CpuRenderer, RenderTarget, Renderer, Scene, SceneObject};
+use tracker::render::{
+    BackgroundMesh, CpuRenderer, RenderTarget, Renderer, RendererKind, Scene, SceneObject,
+};
 
 fn noise_texture(size: u32) -> Arc<Texture> {
     let mut state = 0x9e37_79b9_u32;
@@ -82,7 +85,12 @@ fn plane(size: f32) -> Mesh {
     Mesh::new("bench-plane", parts).expect("valid mesh")
 }
 
-fn bench_render(c: &mut Criterion) {
+/// Benchmarks one backend; names are prefixed with `gpu_` for the wgpu backend (the CPU names are unchanged).
+fn bench_backend(c: &mut Criterion, kind: RendererKind, renderer: &mut dyn Renderer) {
+    let prefix = match kind {
+        RendererKind::Cpu => "",
+        RendererKind::Gpu => "gpu_",
+    };
     // EVK4-like event camera: 1280x720, ~70 degree horizontal field of view.
     let camera =
         PinholeCamera::from_horizontal_fov(70f64.to_radians(), 1280, 720).expect("valid camera");
@@ -92,7 +100,6 @@ fn bench_render(c: &mut Criterion) {
         object.triangles().len(),
         object.diameter()
     );
-    let mut renderer = CpuRenderer::new();
     let mesh = renderer.add_mesh(object.clone()).expect("registered");
     let wall = renderer.add_mesh(Arc::new(plane(3.0))).expect("registered");
     let pose = Isometry3::from_parts(
@@ -105,7 +112,7 @@ fn bench_render(c: &mut Criterion) {
         Roi::around_object(&camera, &center, object.diameter(), 1.2, 160).expect("roi in view");
     let mut target = RenderTarget::with_capacity(160, 160);
 
-    c.bench_function("render_roi_160_5k_tris", |b| {
+    c.bench_function(&format!("{prefix}render_roi_160_5k_tris"), |b| {
         b.iter(|| {
             renderer
                 .render_roi(&Scene::objects(&objects), &camera, &roi, &mut target)
@@ -120,12 +127,27 @@ fn bench_render(c: &mut Criterion) {
     }];
     let scene = Scene::objects(&objects).with_background(&background);
     let mut full = RenderTarget::with_capacity(1280, 720);
-    c.bench_function("render_full_1280x720_5k_tris_plus_background", |b| {
-        b.iter(|| {
-            renderer.render(&scene, &camera, &mut full).expect("render");
-            black_box(full.depth()[360 * 1280 + 640]);
-        })
-    });
+    c.bench_function(
+        &format!("{prefix}render_full_1280x720_5k_tris_plus_background"),
+        |b| {
+            b.iter(|| {
+                renderer.render(&scene, &camera, &mut full).expect("render");
+                black_box(full.depth()[360 * 1280 + 640]);
+            })
+        },
+    );
+}
+
+fn bench_render(c: &mut Criterion) {
+    bench_backend(c, RendererKind::Cpu, &mut CpuRenderer::new());
+    #[cfg(feature = "gpu")]
+    match tracker::render::GpuRenderer::new() {
+        Ok(mut gpu) => {
+            println!("GPU adapter: {}", gpu.adapter());
+            bench_backend(c, RendererKind::Gpu, &mut gpu);
+        }
+        Err(e) => println!("GPU renderer benchmarks skipped: {e}"),
+    }
 }
 
 criterion_group!(benches, bench_render);

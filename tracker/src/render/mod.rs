@@ -154,3 +154,46 @@ pub trait Renderer {
         self.render(scene, &camera.crop(roi), target)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn renderer_kind_parses_prints_and_deserialises_in_lower_case() {
+        for (kind, name) in [(RendererKind::Cpu, "cpu"), (RendererKind::Gpu, "gpu")] {
+            assert_eq!(kind.to_string(), name);
+            assert_eq!(name.parse::<RendererKind>(), Ok(kind));
+            assert_eq!(name.to_uppercase().parse::<RendererKind>(), Ok(kind));
+            let json = format!("\"{name}\"");
+            assert_eq!(serde_json::to_string(&kind).ok(), Some(json.clone()));
+            assert_eq!(serde_json::from_str::<RendererKind>(&json).ok(), Some(kind));
+        }
+        let err = "vulkan".parse::<RendererKind>().unwrap_err();
+        assert!(err.to_string().contains("`vulkan`"), "{err}");
+        assert!(serde_json::from_str::<RendererKind>("\"Gpu\"").is_err());
+        assert_eq!(RendererKind::default(), RendererKind::Cpu);
+    }
+
+    #[test]
+    fn cpu_renderer_is_created_by_kind() {
+        let mut r = create_renderer(RendererKind::Cpu).expect("CPU renderer always exists");
+        let mut target = RenderTarget::new();
+        let camera = PinholeCamera::new(100.0, 100.0, 15.5, 11.5, 32, 24).expect("camera");
+        r.render(&Scene::objects(&[]), &camera, &mut target)
+            .expect("empty scene");
+        assert_eq!((target.width(), target.height()), (32, 24));
+    }
+
+    #[cfg(not(feature = "gpu"))]
+    #[test]
+    fn gpu_kind_without_the_feature_says_how_to_get_it() {
+        let err = create_renderer(RendererKind::Gpu)
+            .err()
+            .expect("no GPU backend built");
+        assert!(
+            matches!(&err, RenderError::Unavailable(m) if m.contains("`gpu` cargo feature")),
+            "{err}"
+        );
+    }
+}
