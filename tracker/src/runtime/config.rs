@@ -223,12 +223,16 @@ pub struct LiveConfig {
 pub struct TrackerConfig {
     /// Method name (`static`: hold the first pose; more as the tracker lands).
     pub method: String,
+    /// Real-time priority of the tracker thread: 0 = normal scheduling, 1..=99 = `SCHED_FIFO` at that priority
+    /// (Linux; needs CAP_SYS_NICE or an rtprio limit; when refused the run carries on and says so).
+    pub realtime_priority: u8,
 }
 
 impl Default for TrackerConfig {
     fn default() -> Self {
         Self {
             method: "static".into(),
+            realtime_priority: 0,
         }
     }
 }
@@ -466,6 +470,15 @@ impl Config {
                 format!(
                     "{} is out of range: at most 60000 ms",
                     self.source.start_delay_ms
+                ),
+            ));
+        }
+        if self.tracker.realtime_priority > 99 {
+            return Err(bad(
+                "tracker.realtime_priority",
+                format!(
+                    "{} is out of range: 0 (off) or a SCHED_FIFO priority 1..=99",
+                    self.tracker.realtime_priority
                 ),
             ));
         }
@@ -716,6 +729,10 @@ mod tests {
             e.contains("`status.period_ms`") && e.contains("out of range"),
             "{e}"
         );
+        let e = parse("[source]\nkind = \"demo\"\n[tracker]\nrealtime_priority = 120\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`tracker.realtime_priority`"), "{e}");
         let e = parse("[source]\nkind = \"demo\"\n[queue]\nbatch_us = 5\n")
             .unwrap_err()
             .to_string();

@@ -253,6 +253,7 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
         outputs,
         status_period: Duration::from_millis(config.status.period_ms),
         wait_for_room: config.source.pace == Pace::Fast,
+        rt_priority: config.tracker.realtime_priority,
     };
     let result = rt.block_on(run_parts(parts, hooks));
     rt.shutdown_timeout(Duration::from_secs(2));
@@ -275,6 +276,7 @@ struct Parts {
     outputs: OutputPaths,
     status_period: Duration,
     wait_for_room: bool,
+    rt_priority: u8,
 }
 
 fn snapshot(health: &Mutex<Health>) -> Health {
@@ -300,6 +302,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         outputs,
         status_period,
         wait_for_room,
+        rt_priority,
     } = p;
     let stop = hooks.stop.clone();
     let describe = source.describe();
@@ -308,7 +311,13 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
     let worker = Worker::new(tracker, sinks, timeline, queue.clone(), health.clone());
     let tracker_thread = std::thread::Builder::new()
         .name("tracker".into())
-        .spawn(move || worker.run())
+        .spawn(move || {
+            let (end, refused) = worker.run_with_priority(rt_priority);
+            if let Some(why) = refused {
+                eprintln!("warning: {why}");
+            }
+            end
+        })
         .map_err(|e| RuntimeError::Thread(format!("cannot start the tracker thread: {e}")))?;
 
     // Ctrl-C stops cleanly: the source ends, the tracker drains, sinks flush, the summary is printed.

@@ -47,6 +47,32 @@ impl<S: PoseSink> PoseSink for SharedSink<S> {
     }
 }
 
+/// Asks for `SCHED_FIFO` at `priority` for the calling thread.
+#[cfg(target_os = "linux")]
+fn set_fifo_priority(priority: u8) -> Result<(), String> {
+    let param = libc::sched_param {
+        sched_priority: i32::from(priority),
+    };
+    // SAFETY: pthread_self() is the calling thread; `param` is a valid, initialised sched_param.
+    let rc = unsafe { libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &param) };
+    if rc == 0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "SCHED_FIFO priority {priority} refused for the tracker thread ({}); running with normal scheduling",
+            std::io::Error::from_raw_os_error(rc)
+        ))
+    }
+}
+
+/// Real-time scheduling is only implemented on Linux.
+#[cfg(not(target_os = "linux"))]
+fn set_fifo_priority(priority: u8) -> Result<(), String> {
+    Err(format!(
+        "SCHED_FIFO priority {priority}: real-time scheduling is only supported on Linux; running with normal scheduling"
+    ))
+}
+
 /// What the tracker thread reports when it ends.
 pub struct WorkerEnd {
     /// The sinks, flushed (returned so the caller can close them).
@@ -101,7 +127,22 @@ impl Worker {
     }
 
     /// Runs until the queue delivers [`Ingest::End`]; then finishes the timeline, flushes the sinks and returns them.
-    pub fn run(mut self) -> WorkerEnd {
+    pub fn run(self) -> WorkerEnd {
+        self.run_loop()
+    }
+
+    /// Like [`Self::run`], first asking for `SCHED_FIFO` at `priority` (1..=99; 0 = keep normal scheduling).
+    /// Returns why the request was refused, if it was.
+    pub fn run_with_priority(self, priority: u8) -> (WorkerEnd, Option<String>) {
+        let refused = if priority == 0 {
+            None
+        } else {
+            set_fifo_priority(priority).err()
+        };
+        (self.run_loop(), refused)
+    }
+
+    fn run_loop(mut self) -> WorkerEnd {
         loop {
             let Some(item) = self.queue.pop(Duration::from_millis(100)) else {
                 continue;
