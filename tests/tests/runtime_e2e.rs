@@ -92,12 +92,15 @@ zenoh = true
 [zenoh]
 listen = ["tcp/127.0.0.1:{port}"]
 connect = []
+congestion_control = "block"
 [can]
 candump_log = "poses.candump.log"
 "#,
         rec_dir.display(),
         out_dir.display()
     );
+    // congestion_control = "block": the test counts every sample, so delivery must be loss-free even when CI is busy
+    // (with the default "drop" a starved machine once lost 4 of 72 samples here; the publisher counted them sent).
     let config = Config::from_toml(&toml, "e2e.toml").unwrap();
 
     // The runtime announces that its sinks are up, then waits until the subscriber is connected.
@@ -165,7 +168,7 @@ candump_log = "poses.candump.log"
         assert_eq!(s.counters.failed + s.counters.dropped, 0, "{}", s.name);
     }
     let rate = summary.tick_rate_hz.unwrap();
-    assert!((110.0..=130.0).contains(&rate), "tick rate {rate} Hz");
+    assert!((90.0..=150.0).contains(&rate), "tick rate {rate} Hz");
 
     // The CSV sink's poses, by time.
     let csv_path = summary.outputs.csv.clone().unwrap();
@@ -180,7 +183,19 @@ candump_log = "poses.candump.log"
 
     // zenoh: every sample on the rmw_zenoh key, with the attachment, decoding to the CSV pose.
     let key = ros2::pose_stamped_key_expr(0, "eventtrack6d/can/pose");
-    assert_eq!(received.len(), ticks.len(), "zenoh samples");
+    let seqs: Vec<i64> = received
+        .iter()
+        .filter_map(|r| Attachment::from_bytes(r.attachment.as_deref()?).ok())
+        .map(|a| a.sequence_number)
+        .collect();
+    let missing: Vec<i64> = (1..=ticks.len() as i64)
+        .filter(|k| !seqs.contains(k))
+        .collect();
+    assert_eq!(
+        received.len(),
+        ticks.len(),
+        "zenoh samples; missing sequence numbers {missing:?}"
+    );
     let mut stamps = Vec::new();
     for (i, r) in received.iter().enumerate() {
         assert_eq!(r.key, key);
@@ -209,10 +224,22 @@ candump_log = "poses.candump.log"
     for w in stamps.windows(2) {
         assert!((8332..=8335).contains(&(w[1] - w[0])), "{w:?}");
     }
+    // In real time: the typical gap between arrivals is one 120 Hz period (median, robust to a busy CI machine),
+    // and the overall rate is close to 120 Hz.
+    let mut gaps: Vec<f64> = received
+        .windows(2)
+        .map(|w| (w[1].at - w[0].at).as_secs_f64() * 1e3)
+        .collect();
+    gaps.sort_by(f64::total_cmp);
+    let median_ms = gaps[gaps.len() / 2];
+    assert!(
+        (6.0..=11.0).contains(&median_ms),
+        "median gap between samples {median_ms} ms"
+    );
     let span = received.last().unwrap().at - received[0].at;
     let arrival_hz = (received.len() - 1) as f64 / span.as_secs_f64();
     assert!(
-        (100.0..=140.0).contains(&arrival_hz),
+        (90.0..=150.0).contains(&arrival_hz),
         "samples arrived at {arrival_hz} Hz"
     );
 
