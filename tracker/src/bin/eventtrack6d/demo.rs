@@ -105,8 +105,14 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     let summary = session::execute(&config, expected)?;
     println!("{summary}");
     if let Some(csv) = &summary.outputs.csv {
-        let rows = session::accuracy(&recording, csv)?;
-        session::print_accuracy(&rows, &config.tracker.method);
+        if summary.stopped {
+            println!(
+                "accuracy:        not scored (stopped early; the poses cover only part of the sequence)"
+            );
+        } else {
+            let rows = session::accuracy(&recording, csv)?;
+            session::print_accuracy(&rows, &config.tracker.method);
+        }
         println!("poses:           {}", csv.display());
         if let Some(p) = write_overlay_strip(&recording, csv, &out)? {
             println!("overlay:         {}", p.display());

@@ -42,7 +42,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .and_then(|r| session::expected_ticks(&r));
     let summary = session::execute(&config, expected)?;
     println!("{summary}");
-    if let (Some(rec), Some(csv), false) = (&recording, &summary.outputs.csv, args.no_accuracy)
+    let score = !args.no_accuracy && !summary.stopped;
+    if let (Some(rec), Some(csv), true) = (&recording, &summary.outputs.csv, score)
         && Recording::open(rec).is_ok_and(|r| r.ground_truth.is_some())
     {
         let rows = session::accuracy(rec, csv)?;
