@@ -263,9 +263,12 @@ mod tests {
     use drivers::timeline::ideal_edges;
     use nalgebra::Isometry3;
 
+    /// (tick index, depth frame, estimates) of each publish call.
+    type Seen = Arc<Mutex<Vec<(u64, Option<u64>, usize)>>>;
+
     /// Records tick indices and depth flags; fails every 5th tick to exercise error counting.
     struct Probe {
-        seen: Arc<Mutex<Vec<(u64, Option<u64>, usize)>>>,
+        seen: Seen,
         counters: SinkCounters,
     }
 
