@@ -168,7 +168,10 @@ candump_log = "poses.candump.log"
         assert_eq!(s.counters.failed + s.counters.dropped, 0, "{}", s.name);
     }
     // Every depth frame reached the tracker, and the final status names the object and its state.
-    assert_eq!(summary.source_stats.depth_frames, rec.depth_frames.len() as u64);
+    assert_eq!(
+        summary.source_stats.depth_frames,
+        rec.depth_frames.len() as u64
+    );
     assert_eq!(summary.source_stats.depth_missing, 0);
     assert_eq!(summary.status["objects"]["can"]["state"], "tracking");
     assert_eq!(summary.status["ticks"], ticks.len() as u64);
