@@ -3,7 +3,9 @@
 pub mod eval;
 pub mod geometry;
 pub mod mesh;
-pub mod render;
-pub mod track;
 pub mod publish;
+pub mod recon;
+pub mod refine;
+pub mod render;
 pub mod runtime;
+pub mod track;

@@ -35,13 +35,18 @@ impl PoseTracker for HoldPoseTracker {
     fn push_depth(&mut self, _t_us: i64, _frame: &DepthFrame) {}
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
         self.last_tick_us = Some(tick.t_us);
-        out.extend(self.poses.iter().enumerate().map(|(object, pose)| PoseEstimate {
-            object,
-            t_us: tick.t_us,
-            pose: *pose,
-            quality: 1.0,
-            state: TrackingState::Tracking,
-        }));
+        out.extend(
+            self.poses
+                .iter()
+                .enumerate()
+                .map(|(object, pose)| PoseEstimate {
+                    object,
+                    t_us: tick.t_us,
+                    pose: *pose,
+                    quality: 1.0,
+                    state: TrackingState::Tracking,
+                }),
+        );
     }
     fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
         self.last_tick_us?;

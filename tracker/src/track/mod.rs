@@ -5,11 +5,22 @@
 //! then the depth frame exposed at that tick (if any), then [`PoseTracker::tick`], which appends one estimate per
 //! tracked object.
 
+mod bench_method;
+mod config;
 mod estimate;
+mod eventtrack;
 mod hold;
+mod object;
+mod offline;
+mod overlay;
 
+pub use bench_method::{InitNoise, TrackerMethod, recording_object, recording_rig};
+pub use config::{DepthUse, QualityConfig, TrackerConfig, TrackingMethod};
 pub use estimate::{PoseEstimate, TrackingState};
+pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, TrackingRig};
 pub use hold::HoldPoseTracker;
+pub use offline::{OfflineStats, track_recording};
+pub use overlay::{OverlayRenderer, OverlayWriter};
 
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
@@ -29,4 +40,9 @@ pub trait PoseTracker: Send {
     /// The pose of object `object` at any time `t_us` (interpolated between ticks, extrapolated at most one tick
     /// period past the last one); `None` before the first tick or for an unknown object.
     fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate>;
+    /// The reconstructed event state (intensity `I_t`, time surface), for overlays; `None` if the tracker keeps
+    /// none.
+    fn event_surface(&self) -> Option<&crate::recon::EventSurface> {
+        None
+    }
 }

@@ -9,6 +9,7 @@ mod inspect;
 mod progress;
 mod run;
 mod session;
+mod track;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -27,6 +28,7 @@ enum Command {
     Convert(convert::ConvertArgs),
     Eval(eval::EvalArgs),
     Bench(bench::BenchArgs),
+    Track(track::TrackArgs),
     Run(run::RunArgs),
     Demo(demo::DemoArgs),
 }
@@ -40,6 +42,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(&args),
         Command::Run(args) => run::run(&args),
         Command::Demo(args) => demo::run(&args),
+        Command::Track(args) => track::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

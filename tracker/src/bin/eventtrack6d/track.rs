@@ -1,0 +1,208 @@
+//! `eventtrack6d track`: runs a tracking method over a recording as fast as possible and writes the poses.
+
+use crate::progress::bytes_bar;
+use anyhow::{Context, Result, bail};
+use clap::Args;
+use drivers::recording::Recording;
+use std::path::PathBuf;
+use std::time::Instant;
+use tracker::eval::{PoseRecord, PoseTrack, format_pose_csv, ground_truth_objects, parse_pose_csv};
+use tracker::render::{CpuRenderer, Renderer};
+use tracker::track::{
+    EventTrack6d, InitNoise, OverlayRenderer, OverlayWriter, TrackerConfig, TrackingMethod,
+    recording_object, recording_rig, track_recording,
+};
+
+/// Track the objects of a recording from their first pose on: every 120 Hz tick gets a pose per object, written
+/// as a pose CSV (`t_us,object,x,y,z,qx,qy,qz,qw,quality,state`). Runs as fast as possible (no real-time pacing).
+#[derive(Debug, Args)]
+pub struct TrackArgs {
+    /// Recording directory (events.raw, depth/, rig.json, models/).
+    pub recording: PathBuf,
+    /// Tracking method: eventtrack6d (events + depth), depth30 (depth frames only, pose held in between) or
+    /// events-only (no depth after the first frame).
+    #[arg(long, default_value = "eventtrack6d")]
+    pub method: String,
+    /// Output pose CSV.
+    #[arg(long, value_name = "CSV")]
+    pub out: PathBuf,
+    /// Objects to track (comma-separated); default: every object in the ground truth or the first-pose file.
+    #[arg(long, value_delimiter = ',')]
+    pub objects: Vec<String>,
+    /// First poses as a pose CSV (first row per object); default: the recording's ground truth at its first tick.
+    #[arg(long, value_name = "CSV")]
+    pub first_poses: Option<PathBuf>,
+    /// Perturb each first pose by DEG degrees (random axis) and CM centimetres (random direction), e.g. `5,5`.
+    #[arg(long, value_name = "DEG,CM")]
+    pub init_noise: Option<String>,
+    /// Seed of the first-pose perturbation.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Tracker parameters: a TOML file with the `[tracker]` table's keys at top level (see README).
+    #[arg(long, value_name = "TOML")]
+    pub params: Option<PathBuf>,
+    /// Also write overlay images (reconstructed intensity with the model outline at the estimate) into DIR.
+    #[arg(long, value_name = "DIR")]
+    pub overlay: Option<PathBuf>,
+    /// Draw an overlay every N ticks (120 Hz ticks; 12 = 10 per second).
+    #[arg(long, default_value_t = 12, value_name = "N")]
+    pub overlay_every: u64,
+}
+
+/// Runs the command.
+pub fn run(args: &TrackArgs) -> Result<()> {
+    let method = TrackingMethod::from_name(&args.method).with_context(|| {
+        format!(
+            "unknown method `{}`: available are eventtrack6d, depth30, events-only",
+            args.method
+        )
+    })?;
+    let base = match &args.params {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            toml::from_str::<TrackerConfig>(&text)
+                .with_context(|| format!("{}: invalid tracker parameters", path.display()))?
+        }
+        None => TrackerConfig::default(),
+    };
+    let config = method.configure(&base);
+    let noise = args
+        .init_noise
+        .as_deref()
+        .map(|s| InitNoise::parse(s, args.seed))
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
+    let rec = Recording::open(&args.recording)?;
+    let first_poses: Vec<PoseRecord> = match &args.first_poses {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading {}", path.display()))?;
+            parse_pose_csv(&text).with_context(|| format!("{}", path.display()))?
+        }
+        None => Vec::new(),
+    };
+    let names: Vec<String> = if !args.objects.is_empty() {
+        args.objects.clone()
+    } else if !first_poses.is_empty() {
+        let mut n: Vec<String> = first_poses.iter().map(|r| r.object.clone()).collect();
+        n.dedup();
+        n
+    } else {
+        ground_truth_objects(&rec)?
+    };
+    let ticks = tracker::eval::recording_ticks(&rec)?;
+    let mut objects = Vec::with_capacity(names.len());
+    for name in &names {
+        let (t0, pose) = if let Some(r) = first_poses.iter().find(|r| &r.object == name) {
+            (r.t_us, r.pose)
+        } else {
+            let gt = rec.ground_truth.as_deref().with_context(|| {
+                format!("no first pose for `{name}`: the recording has no ground truth; pass --first-poses")
+            })?;
+            let track = PoseTrack::from_samples(gt, name);
+            let (start, _) = track
+                .first()
+                .with_context(|| format!("object `{name}` has no ground-truth pose"))?;
+            let tick = ticks.iter().find(|t| t.t_us >= start).with_context(|| {
+                format!("object `{name}`: no tick after its first ground-truth pose")
+            })?;
+            let pose = track.interpolated_at(tick.t_us).with_context(|| {
+                format!("object `{name}`: no ground truth at tick {}", tick.t_us)
+            })?;
+            (tick.t_us, pose)
+        };
+        let pose = noise.map_or(pose, |n| n.apply(&pose));
+        objects.push(recording_object(&rec, name, t0, pose)?);
+    }
+    if objects.is_empty() {
+        bail!("nothing to track: no object given");
+    }
+    let start = objects.iter().map(|o| o.first_t_us).min().unwrap_or(0);
+    let meshes: Vec<_> = objects.iter().map(|o| o.mesh.clone()).collect();
+    let rig = recording_rig(&rec)?;
+    let renderer: Box<dyn Renderer + Send> = Box::new(CpuRenderer::new());
+    let mut tracker = EventTrack6d::new(config, rig, objects, renderer)?;
+    let mut overlay = match &args.overlay {
+        Some(dir) => Some(OverlayWriter::new(
+            dir,
+            args.overlay_every,
+            OverlayRenderer::new(rig.event_camera, &meshes)?,
+        )?),
+        None => None,
+    };
+    let total = std::fs::metadata(rec.dir().join("events.raw"))
+        .map(|m| m.len())
+        .unwrap_or(0);
+    let bar = bytes_bar(
+        total,
+        &format!("{} {}", method.name(), args.recording.display()),
+    );
+    let mut out = Vec::new();
+    let mut overlay_error = None;
+    let started = Instant::now();
+    let stats = track_recording(
+        &rec,
+        &mut tracker,
+        start,
+        |tick, estimates, t| {
+            for e in estimates {
+                out.push(PoseRecord {
+                    t_us: e.t_us,
+                    object: names[e.object].clone(),
+                    pose: e.pose,
+                    quality: f64::from(e.quality),
+                    state: e.state.as_str().into(),
+                });
+            }
+            if let (Some(w), Some(surface)) = (overlay.as_mut(), t.event_surface()) {
+                if overlay_error.is_none() {
+                    overlay_error = w.tick(tick.index, surface, tick.t_us, estimates).err();
+                }
+            }
+        },
+        |bytes| bar.set_position(bytes),
+    )?;
+    bar.finish_and_clear();
+    let elapsed = started.elapsed().as_secs_f64();
+    if let Some(e) = overlay_error {
+        bail!("overlay: {e}");
+    }
+    std::fs::write(&args.out, format_pose_csv(&out))
+        .with_context(|| format!("writing {}", args.out.display()))?;
+    let counters = tracker.counters();
+    eprintln!(
+        "{}: {} ticks, {} objects, {} events, {} depth frames ({} missing) in {:.2} s ({:.1} ticks/s); {} poses -> {}",
+        method.name(),
+        stats.ticks,
+        names.len(),
+        stats.events,
+        stats.depth_frames,
+        stats.depth_frames_missing,
+        elapsed,
+        stats.ticks as f64 / elapsed.max(1e-9),
+        out.len(),
+        args.out.display()
+    );
+    if counters.render_errors > 0 || counters.depth_frames_unused > 0 {
+        eprintln!(
+            "warning: {} render errors, {} depth frames unused",
+            counters.render_errors, counters.depth_frames_unused
+        );
+    }
+    let lost = out.iter().filter(|r| r.state == "lost").count();
+    if lost > 0 {
+        eprintln!("warning: {lost} poses reported `lost`");
+    }
+    if let Some(w) = &overlay {
+        eprintln!(
+            "{} overlay images in {}",
+            w.written(),
+            args.overlay
+                .as_ref()
+                .map(|p| p.display().to_string())
+                .unwrap_or_default()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,97 @@
+//! The depth modality: robust, occlusion-aware point-to-plane residuals between the model's visible surface at
+//! the hypothesis and the reconstructed depth `D_t` (projective association in the ROI camera).
+
+use super::{ModelView, NormalEquations};
+use crate::geometry::PinholeCamera;
+use crate::recon::DepthImage;
+use nalgebra::{Isometry3, Point2, Vector3};
+
+/// Parameters of the depth term.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DepthTerm {
+    /// Noise model `sigma(z) = sigma_0 + sigma_z2 * z^2`, metres: constant part.
+    pub sigma_0: f64,
+    /// Quadratic part, 1/metre.
+    pub sigma_z2: f64,
+    /// A measurement nearer than the model by more than this (metres) is an occluder: the point is skipped.
+    pub occlusion_gap: f64,
+    /// Residuals beyond this (metres) are outliers (weight 0).
+    pub max_residual: f64,
+}
+
+impl Default for DepthTerm {
+    fn default() -> Self {
+        Self {
+            sigma_0: 0.0015,
+            sigma_z2: 0.0025,
+            occlusion_gap: 0.025,
+            max_residual: 0.03,
+        }
+    }
+}
+
+/// What the depth term saw in one evaluation.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct DepthTermStats {
+    /// Model points considered.
+    pub points: usize,
+    /// Points with a measurement behind no occluder (used).
+    pub measured: usize,
+    /// Points hidden by a nearer measurement (occluder).
+    pub occluded: usize,
+    /// Used points whose residual is within two sigma.
+    pub inliers: usize,
+}
+
+impl DepthTerm {
+    /// Accumulates the residuals of `view` at `pose` against `depth` (seen by `camera`) into `ne`; `center_obj` is
+    /// the object centre (object frame) the increment rotates about.
+    pub fn accumulate(
+        &self,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        center_obj: &Vector3<f64>,
+        camera: &PinholeCamera,
+        depth: &DepthImage,
+        ne: &mut NormalEquations,
+    ) -> DepthTermStats {
+        let mut stats = DepthTermStats {
+            points: view.surface.len(),
+            ..DepthTermStats::default()
+        };
+        let c = pose * nalgebra::Point3::from(*center_obj);
+        for sp in &view.surface {
+            let p = pose * sp.position;
+            if p.z <= 0.01 {
+                continue;
+            }
+            let u = (camera.fx * p.x / p.z + camera.cx).round() as i32;
+            let v = (camera.fy * p.y / p.z + camera.cy).round() as i32;
+            let zm = f64::from(depth.at(u, v));
+            if zm <= 0.0 {
+                continue;
+            }
+            if zm < p.z - self.occlusion_gap {
+                stats.occluded += 1;
+                continue;
+            }
+            let n = pose.rotation * sp.normal;
+            let pm = camera.unproject(&Point2::new(f64::from(u), f64::from(v)), zm);
+            let r = n.dot(&(pm - p));
+            stats.measured += 1;
+            if r.abs() > self.max_residual {
+                continue;
+            }
+            let sigma = self.sigma_0 + self.sigma_z2 * p.z * p.z;
+            if r.abs() < 2.0 * sigma {
+                stats.inliers += 1;
+            }
+            // Huber weight at 1.5 sigma.
+            let k = 1.5 * sigma;
+            let robust = if r.abs() <= k { 1.0 } else { k / r.abs() };
+            ne.add_point(&(-n), &(p - c), r, robust / (sigma * sigma));
+        }
+        stats
+    }
+}

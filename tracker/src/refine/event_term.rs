@@ -1,0 +1,398 @@
+//! The event modality: recent events must lie on or inside the model's silhouette.
+//!
+//! The static background produces no events; the tracked object (its outline sweeping over the background and its
+//! texture) does. Events of the short window `[t - dt, t]` that fall outside the silhouette at the hypothesis say
+//! the silhouette is in the wrong place: each is associated with its nearest contour point and contributes the
+//! hinge residual `max(0, m . (e - pi(P)))` (m: the contour's outward image normal, e: the event, pi(P): the
+//! projected contour point). A lagging estimate leaves its leading edge's events uncovered, an estimate ahead of the
+//! object leaves the trailing edge's events uncovered: both pull towards the object. Isolated (noise) events are
+//! removed first; far events (hands, other objects) are cut off by a robust weight.
+
+use super::{ModelView, NormalEquations};
+use crate::geometry::{PinholeCamera, Roi};
+use crate::recon::EventSurface;
+use nalgebra::{Isometry3, Vector3, Vector6};
+
+/// Parameters of the event term.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EventTerm {
+    /// Residual scale, full-image pixels.
+    pub sigma_px: f64,
+    /// Events farther than this from the silhouette (full-image pixels) are ignored.
+    pub max_distance_px: f64,
+    /// Minimum number of event bins in a 3x3 neighbourhood for a bin to count (noise filter).
+    pub min_neighbours: u8,
+    /// How far along its normal a contour point looks for an event edge, full-image pixels.
+    pub match_distance_px: f64,
+    /// Weight of the contour-to-edge pull relative to the uncovered-event hinge.
+    pub match_weight: f64,
+    /// Contour points whose predicted sweep in the window is below this (full-image pixels) expect no edge events
+    /// and take no part in the contour-to-edge pull.
+    pub min_sweep_px: f64,
+}
+
+impl Default for EventTerm {
+    fn default() -> Self {
+        Self {
+            sigma_px: 1.5,
+            max_distance_px: 12.0,
+            min_neighbours: 2,
+            match_distance_px: 6.0,
+            match_weight: 0.5,
+            min_sweep_px: 0.7,
+        }
+    }
+}
+
+/// What the event term saw in one evaluation.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct EventTermStats {
+    /// Event bins kept in the ROI after the noise filter.
+    pub bins: usize,
+    /// Kept bins outside the predicted silhouette (candidates).
+    pub outside: usize,
+    /// Candidates that contributed a non-zero residual.
+    pub active: usize,
+}
+
+/// The recent events of one ROI, binned on the ROI grid.
+#[derive(Debug, Clone, Default)]
+pub struct EventEdges {
+    width: u32,
+    height: u32,
+    hits: Vec<u8>,
+    kept: Vec<bool>,
+    /// Centres of kept bins outside the predicted silhouette, full-image pixel coordinates.
+    candidates: Vec<[f64; 2]>,
+    /// Nearest contour point index per candidate (`u32::MAX` = none within range).
+    association: Vec<u32>,
+    /// Per contour point, the nearest kept event bin along its image normal (full-image pixels), if any.
+    contour_match: Vec<Option<[f64; 2]>>,
+    /// Per contour point, how far (full-image pixels, along its outward normal) the predicted motion swept it
+    /// during the event window: positive on leading edges, negative on trailing edges.
+    sweep: Vec<f64>,
+    roi: Option<Roi>,
+    stats: EventTermStats,
+}
+
+impl EventEdges {
+    /// Bins the events of `surface` newer than `t_us - window_us` inside `roi` (the render's ROI; `mask` is the
+    /// render's mask on the same grid, `id` the object's label) and keeps the candidates outside the silhouette.
+    #[allow(clippy::too_many_arguments)]
+    pub fn collect(
+        &mut self,
+        term: &EventTerm,
+        surface: &EventSurface,
+        roi: &Roi,
+        mask: &[u16],
+        id: u16,
+        t_us: i64,
+        window_us: i64,
+        max_candidates: usize,
+    ) {
+        let (w, h) = (roi.out_width, roi.out_height);
+        let n = w as usize * h as usize;
+        self.width = w;
+        self.height = h;
+        self.roi = Some(*roi);
+        self.hits.clear();
+        self.hits.resize(n, 0);
+        self.kept.clear();
+        self.kept.resize(n, false);
+        self.candidates.clear();
+        self.association.clear();
+        self.contour_match.clear();
+        self.stats = EventTermStats::default();
+        let sx = f64::from(w) / roi.width;
+        let sy = f64::from(h) / roi.height;
+        let x0 = roi.x.floor().max(0.0) as i64;
+        let y0 = roi.y.floor().max(0.0) as i64;
+        let x1 = ((roi.x + roi.width).ceil() as i64).min(i64::from(surface.width()));
+        let y1 = ((roi.y + roi.height).ceil() as i64).min(i64::from(surface.height()));
+        // At most about four samples per bin: larger ROIs are visited with a stride.
+        let step = ((1.0 / sx).min(1.0 / sy) / 2.0).floor().max(1.0) as i64;
+        let since = t_us - window_us;
+        let mut y = y0;
+        while y < y1 {
+            let j = ((y as f64 + 0.5 - roi.y) * sy) as i64;
+            if j >= 0 && j < i64::from(h) {
+                let row = j as usize * w as usize;
+                let mut x = x0;
+                while x < x1 {
+                    if let Some(t) = surface.last_event_us(x as u32, y as u32) {
+                        if t > since && t <= t_us {
+                            let i = ((x as f64 + 0.5 - roi.x) * sx) as i64;
+                            if i >= 0 && i < i64::from(w) {
+                                let cell = &mut self.hits[row + i as usize];
+                                *cell = cell.saturating_add(1);
+                            }
+                        }
+                    }
+                    x += step;
+                }
+            }
+            y += step;
+        }
+        let (wi, hi) = (w as i64, h as i64);
+        for j in 0..hi {
+            for i in 0..wi {
+                let k = (j * wi + i) as usize;
+                if self.hits[k] == 0 {
+                    continue;
+                }
+                let mut neighbours = 0u8;
+                for dj in -1..=1 {
+                    for di in -1..=1 {
+                        let (a, b) = (i + di, j + dj);
+                        if a >= 0
+                            && b >= 0
+                            && a < wi
+                            && b < hi
+                            && self.hits[(b * wi + a) as usize] > 0
+                        {
+                            neighbours += 1;
+                        }
+                    }
+                }
+                if neighbours < term.min_neighbours {
+                    continue;
+                }
+                self.kept[k] = true;
+                self.stats.bins += 1;
+                if mask.get(k).copied() != Some(id) {
+                    self.stats.outside += 1;
+                }
+            }
+        }
+        let stride = self.stats.outside.div_ceil(max_candidates.max(1)).max(1);
+        let mut seen = 0usize;
+        for j in 0..hi {
+            for i in 0..wi {
+                let k = (j * wi + i) as usize;
+                if !self.kept[k] || mask.get(k).copied() == Some(id) {
+                    continue;
+                }
+                if seen % stride == 0 {
+                    self.candidates.push([
+                        roi.x - 0.5 + (i as f64 + 0.5) / sx,
+                        roi.y - 0.5 + (j as f64 + 0.5) / sy,
+                    ]);
+                }
+                seen += 1;
+            }
+        }
+    }
+
+    /// Statistics of the last collection / accumulation.
+    pub fn stats(&self) -> EventTermStats {
+        self.stats
+    }
+
+    /// Associates every candidate with its nearest contour point of `view` at `pose` (within the term's range),
+    /// and every contour point with the nearest kept event bin along its image normal. `motion` is the object's
+    /// predicted velocity (centre m/s, angular rad/s, camera frame) about `center_obj`, `window_s` the event window:
+    /// together they say how wide a band of events each edge leaves behind.
+    #[allow(clippy::too_many_arguments)]
+    pub fn associate(
+        &mut self,
+        term: &EventTerm,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        center_obj: &Vector3<f64>,
+        camera: &PinholeCamera,
+        motion: &Vector6<f64>,
+        window_s: f64,
+    ) {
+        self.association.clear();
+        self.contour_match.clear();
+        self.sweep.clear();
+        let c = pose * nalgebra::Point3::from(*center_obj);
+        let v = Vector3::new(motion[0], motion[1], motion[2]);
+        let w = Vector3::new(motion[3], motion[4], motion[5]);
+        for cp in &view.contour {
+            let p = pose * cp.position;
+            if p.z <= 0.01 {
+                self.sweep.push(0.0);
+                continue;
+            }
+            let dp = v + w.cross(&(p - c));
+            let iz = 1.0 / p.z;
+            let du = camera.fx * (dp.x - p.x * iz * dp.z) * iz;
+            let dv = camera.fy * (dp.y - p.y * iz * dp.z) * iz;
+            self.sweep
+                .push((cp.normal_2d[0] * du + cp.normal_2d[1] * dv) * window_s);
+        }
+        if let Some(roi) = self.roi {
+            let sx = f64::from(self.width) / roi.width;
+            let sy = f64::from(self.height) / roi.height;
+            let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+            let reach = (term.match_distance_px * sx).ceil() as i64;
+            for cp in &view.contour {
+                let p = pose * cp.position;
+                let found = camera.project(&p).and_then(|uv| {
+                    let fi = (uv.x + 0.5 - roi.x) * sx - 0.5;
+                    let fj = (uv.y + 0.5 - roi.y) * sy - 0.5;
+                    let [mx, my] = cp.normal_2d;
+                    // Walk inwards: the first kept bin is where the event cloud's outer boundary lies.
+                    for k in 0..=reach {
+                        let i = (fi - k as f64 * mx).round() as i64;
+                        let j = (fj - k as f64 * my).round() as i64;
+                        if i >= 0 && j >= 0 && i < wi && j < hi && self.kept[(j * wi + i) as usize]
+                        {
+                            return Some([
+                                roi.x - 0.5 + (i as f64 + 0.5) / sx,
+                                roi.y - 0.5 + (j as f64 + 0.5) / sy,
+                            ]);
+                        }
+                    }
+                    None
+                });
+                self.contour_match.push(found);
+            }
+        }
+        let max_d2 = term.max_distance_px * term.max_distance_px;
+        for e in &self.candidates {
+            let mut best = (u32::MAX, max_d2);
+            for (k, cp) in view.contour.iter().enumerate() {
+                let p = pose * cp.position;
+                if p.z <= 0.01 {
+                    continue;
+                }
+                let du = camera.fx * p.x / p.z + camera.cx - e[0];
+                let dv = camera.fy * p.y / p.z + camera.cy - e[1];
+                let d2 = du * du + dv * dv;
+                if d2 < best.1 {
+                    best = (k as u32, d2);
+                }
+            }
+            self.association.push(best.0);
+        }
+    }
+
+    /// Accumulates the hinge residuals of the associated candidates at `pose` into `ne` (camera: the full event
+    /// camera). Returns how many were active.
+    pub fn accumulate(
+        &mut self,
+        term: &EventTerm,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        center_obj: &Vector3<f64>,
+        camera: &PinholeCamera,
+        ne: &mut NormalEquations,
+    ) -> usize {
+        let c = pose * nalgebra::Point3::from(*center_obj);
+        let mut active = 0;
+        let cutoff = 3.0 * term.sigma_px;
+        for (e, &a) in self.candidates.iter().zip(&self.association) {
+            let Some(cp) = view.contour.get(a as usize) else {
+                continue;
+            };
+            // Behind a trailing edge the object has just uncovered the background: events there are expected.
+            let allowance = (-self.sweep.get(a as usize).copied().unwrap_or(0.0)).max(0.0);
+            let p = pose * cp.position;
+            if p.z <= 0.01 {
+                continue;
+            }
+            let iz = 1.0 / p.z;
+            let u = camera.fx * p.x * iz + camera.cx;
+            let v = camera.fy * p.y * iz + camera.cy;
+            let [mx, my] = cp.normal_2d;
+            let r = mx * (e[0] - u) + my * (e[1] - v) - allowance;
+            if r <= 0.0 || r > term.max_distance_px {
+                continue;
+            }
+            active += 1;
+            // d r / d P = -m^T d pi / d P.
+            let grad = -Vector3::new(
+                mx * camera.fx * iz,
+                my * camera.fy * iz,
+                -(mx * camera.fx * p.x + my * camera.fy * p.y) * iz * iz,
+            );
+            // Cauchy-like weight: full within a few sigma, fading beyond.
+            let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
+            ne.add_point(&grad, &(p - c), r, robust / (term.sigma_px * term.sigma_px));
+        }
+        // The counterpart of the hinge: a moving textured object fills its silhouette with events, so a contour
+        // point with no event under it but events a little inwards lies outside the object: pull it in to the
+        // event cloud's boundary (keeps the outline from growing to cover everything).
+        let s2 = term.sigma_px * term.sigma_px;
+        let moving = self.sweep.iter().any(|s| s.abs() >= term.min_sweep_px);
+        for ((cp, m), &sweep) in view
+            .contour
+            .iter()
+            .zip(&self.contour_match)
+            .zip(&self.sweep)
+        {
+            let Some(e) = m else {
+                continue;
+            };
+            // Only a moving object fills its silhouette with events.
+            if !moving || sweep.is_nan() {
+                continue;
+            }
+            let p = pose * cp.position;
+            if p.z <= 0.01 {
+                continue;
+            }
+            let iz = 1.0 / p.z;
+            let u = camera.fx * p.x * iz + camera.cx;
+            let v = camera.fy * p.y * iz + camera.cy;
+            let [mx, my] = cp.normal_2d;
+            let r = mx * (e[0] - u) + my * (e[1] - v);
+            if r >= 0.0 {
+                continue;
+            }
+            if r.abs() > 2.0 * term.match_distance_px {
+                continue;
+            }
+            let grad = -Vector3::new(
+                mx * camera.fx * iz,
+                my * camera.fy * iz,
+                -(mx * camera.fx * p.x + my * camera.fy * p.y) * iz * iz,
+            );
+            let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
+            ne.add_point(&grad, &(p - c), r, term.match_weight * robust / s2);
+        }
+        self.stats.active = active;
+        active
+    }
+
+    /// Fraction of `view`'s contour points at `pose` that have a kept event bin within two bins (event support of
+    /// a moving outline); `None` without contour.
+    pub fn contour_support(
+        &self,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        camera: &PinholeCamera,
+    ) -> Option<f64> {
+        let roi = self.roi?;
+        if view.contour.is_empty() {
+            return None;
+        }
+        let sx = f64::from(self.width) / roi.width;
+        let sy = f64::from(self.height) / roi.height;
+        let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+        let mut supported = 0usize;
+        for cp in &view.contour {
+            let p = pose * cp.position;
+            let Some(uv) = camera.project(&p) else {
+                continue;
+            };
+            let i = ((uv.x + 0.5 - roi.x) * sx) as i64;
+            let j = ((uv.y + 0.5 - roi.y) * sy) as i64;
+            let mut hit = false;
+            'search: for dj in -2..=2 {
+                for di in -2..=2 {
+                    let (a, b) = (i + di, j + dj);
+                    if a >= 0 && b >= 0 && a < wi && b < hi && self.kept[(b * wi + a) as usize] {
+                        hit = true;
+                        break 'search;
+                    }
+                }
+            }
+            supported += usize::from(hit);
+        }
+        Some(supported as f64 / view.contour.len() as f64)
+    }
+}

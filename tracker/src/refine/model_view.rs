@@ -1,0 +1,171 @@
+//! What refinement needs from one render of the model at the hypothesis: sparse visible surface points with normals
+//! and silhouette (contour) points with outward image normals, stored in the object frame so every iteration can
+//! move them with the current pose without re-rendering.
+
+use crate::geometry::PinholeCamera;
+use crate::render::{MASK_BACKGROUND, MASK_EMPTY, RenderTarget};
+use nalgebra::{Isometry3, Point2, Point3, Vector3};
+
+/// A visible surface point of the model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePoint {
+    /// Position, object frame, metres.
+    pub position: Point3<f64>,
+    /// Unit outward normal, object frame.
+    pub normal: Vector3<f64>,
+}
+
+/// A point on the model's silhouette.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContourPoint {
+    /// Position, object frame, metres.
+    pub position: Point3<f64>,
+    /// Unit outward normal of the silhouette in the image (pixels, x right, y down).
+    pub normal_2d: [f64; 2],
+}
+
+/// The sparse model view of one render.
+#[derive(Debug, Clone, Default)]
+pub struct ModelView {
+    /// Visible surface samples.
+    pub surface: Vec<SurfacePoint>,
+    /// Silhouette samples (occlusion boundaries with nearer objects excluded).
+    pub contour: Vec<ContourPoint>,
+    /// Pixels of the object in the render (after occlusion by other objects).
+    pub visible_pixels: usize,
+}
+
+impl ModelView {
+    /// An empty view with room for `surface` and `contour` samples.
+    pub fn with_capacity(surface: usize, contour: usize) -> Self {
+        Self {
+            surface: Vec::with_capacity(surface),
+            contour: Vec::with_capacity(contour),
+            visible_pixels: 0,
+        }
+    }
+
+    /// Extracts at most `max_surface` surface and `max_contour` contour samples of object `id` from `target`, a
+    /// render with camera `camera` of the scene with the object at `pose`.
+    pub fn extract(
+        &mut self,
+        target: &RenderTarget,
+        camera: &PinholeCamera,
+        id: u16,
+        pose: &Isometry3<f64>,
+        max_surface: usize,
+        max_contour: usize,
+    ) {
+        self.surface.clear();
+        self.contour.clear();
+        let (w, h) = (target.width() as usize, target.height() as usize);
+        let mask = target.mask();
+        let depth = target.depth();
+        let normals = target.normals();
+        let inv = pose.inverse();
+        let mut visible = 0usize;
+        let mut boundary = 0usize;
+        for v in 0..h {
+            for u in 0..w {
+                let i = v * w + u;
+                if mask[i] != id {
+                    continue;
+                }
+                visible += 1;
+                if is_silhouette(mask, depth, w, h, u, v, id) {
+                    boundary += 1;
+                }
+            }
+        }
+        self.visible_pixels = visible;
+        if visible == 0 {
+            return;
+        }
+        let stride = ((visible as f64 / max_surface as f64).sqrt().ceil() as usize).max(1);
+        let contour_step = boundary.div_ceil(max_contour).max(1);
+        let mut boundary_seen = 0usize;
+        for v in 0..h {
+            for u in 0..w {
+                let i = v * w + u;
+                if mask[i] != id {
+                    continue;
+                }
+                let z = f64::from(depth[i]);
+                let p_cam = camera.unproject(&Point2::new(u as f64, v as f64), z);
+                if u % stride == 0 && v % stride == 0 && self.surface.len() < max_surface {
+                    let n = normals[i];
+                    let n_cam = Vector3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]));
+                    if n_cam.norm_squared() > 0.5 {
+                        self.surface.push(SurfacePoint {
+                            position: inv * p_cam,
+                            normal: inv.rotation * n_cam,
+                        });
+                    }
+                }
+                if is_silhouette(mask, depth, w, h, u, v, id) {
+                    if boundary_seen % contour_step == 0 && self.contour.len() < max_contour {
+                        if let Some(n2) = outward_normal(mask, w, h, u, v, id) {
+                            self.contour.push(ContourPoint {
+                                position: inv * p_cam,
+                                normal_2d: n2,
+                            });
+                        }
+                    }
+                    boundary_seen += 1;
+                }
+            }
+        }
+    }
+}
+
+/// Whether object pixel `(u, v)` lies on the silhouette: a 4-neighbour is empty, background or a farther object
+/// (a neighbour that is a nearer object is an occlusion boundary, not the object's own outline).
+fn is_silhouette(
+    mask: &[u16],
+    depth: &[f32],
+    w: usize,
+    h: usize,
+    u: usize,
+    v: usize,
+    id: u16,
+) -> bool {
+    let i = v * w + u;
+    let z = depth[i];
+    let check = |j: usize| {
+        let m = mask[j];
+        m != id && (m == MASK_EMPTY || m == MASK_BACKGROUND || depth[j] > z)
+    };
+    (u == 0 || check(i - 1))
+        || (u + 1 == w || check(i + 1))
+        || (v == 0 || check(i - w))
+        || (v + 1 == h || check(i + w))
+}
+
+/// Outward image normal at a silhouette pixel from the 5x5 neighbourhood's non-object pixels.
+fn outward_normal(
+    mask: &[u16],
+    w: usize,
+    h: usize,
+    u: usize,
+    v: usize,
+    id: u16,
+) -> Option<[f64; 2]> {
+    let (mut nx, mut ny) = (0.0f64, 0.0f64);
+    for dv in -2i64..=2 {
+        for du in -2i64..=2 {
+            let x = u as i64 + du;
+            let y = v as i64 + dv;
+            let outside = x < 0
+                || y < 0
+                || x >= w as i64
+                || y >= h as i64
+                || mask[y as usize * w + x as usize] != id;
+            if outside {
+                nx += du as f64;
+                ny += dv as f64;
+            }
+        }
+    }
+    let n = (nx * nx + ny * ny).sqrt();
+    (n > 1e-9).then(|| [nx / n, ny / n])
+}

@@ -1,0 +1,202 @@
+//! The tracker on a recording: building it from the recording's rig and models, and its benchmark methods
+//! (`eventtrack6d`, `depth30`, `events-only`) behind [`crate::eval::bench::Method`].
+
+use super::config::{TrackerConfig, TrackingMethod};
+use super::eventtrack::{EventTrack6d, TrackedObject, TrackingRig};
+use super::offline::track_recording;
+use crate::eval::EvalError;
+use crate::eval::PoseRecord;
+use crate::eval::bench::{Method, MethodInput};
+use crate::eval::recording_cameras;
+use crate::mesh::{MeshLoadOptions, load_obj};
+use crate::recon::DepthRig;
+use crate::render::{CpuRenderer, Renderer};
+use drivers::recording::Recording;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::sync::Arc;
+
+/// The tracking rig of a recording (event camera, depth camera, extrinsics).
+pub fn recording_rig(rec: &Recording) -> Result<TrackingRig, EvalError> {
+    let cams = recording_cameras(rec)?;
+    Ok(TrackingRig {
+        event_camera: cams.pose_camera,
+        depth: DepthRig {
+            camera: cams.depth_camera,
+            event_from_depth: cams.depth_from_pose.inverse(),
+        },
+    })
+}
+
+/// The tracked object `name` of a recording (mesh from `models/`, diameter from `models_info.json`) with its first
+/// pose.
+pub fn recording_object(
+    rec: &Recording,
+    name: &str,
+    first_t_us: i64,
+    first_pose: Isometry3<f64>,
+) -> Result<TrackedObject, EvalError> {
+    let info = rec.model(name).ok_or_else(|| EvalError::Model {
+        object: name.into(),
+        reason: "not listed in models/models_info.json".into(),
+    })?;
+    let loaded = load_obj(&rec.mesh_path(name), &MeshLoadOptions::default()).map_err(|e| {
+        EvalError::Model {
+            object: name.into(),
+            reason: e.to_string(),
+        }
+    })?;
+    Ok(TrackedObject {
+        name: name.into(),
+        mesh: Arc::new(loaded.mesh),
+        diameter: info.diameter_m,
+        first_t_us,
+        first_pose,
+    })
+}
+
+/// A first-pose perturbation: a rotation of `degrees` about a random axis and a translation of `centimetres` in a
+/// random direction (seeded).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InitNoise {
+    /// Rotation error, degrees.
+    pub degrees: f64,
+    /// Translation error, centimetres.
+    pub centimetres: f64,
+    /// Seed of the random directions.
+    pub seed: u64,
+}
+
+impl InitNoise {
+    /// Parses `DEG,CM` (e.g. `5,5`).
+    pub fn parse(text: &str, seed: u64) -> Result<Self, String> {
+        let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+        let [deg, cm] = parts.as_slice() else {
+            return Err(format!("init noise `{text}`: expected DEG,CM (e.g. 5,5)"));
+        };
+        let num = |s: &str, what: &str| {
+            s.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v >= 0.0)
+                .ok_or_else(|| format!("init noise `{text}`: {what} `{s}` is not a number >= 0"))
+        };
+        Ok(Self {
+            degrees: num(deg, "degrees")?,
+            centimetres: num(cm, "centimetres")?,
+            seed,
+        })
+    }
+
+    /// `pose` perturbed (rotation about the object's origin, in the camera frame).
+    pub fn apply(&self, pose: &Isometry3<f64>) -> Isometry3<f64> {
+        let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
+        let mut unit = || loop {
+            let v = Vector3::new(
+                rng.random::<f64>() * 2.0 - 1.0,
+                rng.random::<f64>() * 2.0 - 1.0,
+                rng.random::<f64>() * 2.0 - 1.0,
+            );
+            let n = v.norm();
+            if n > 1e-3 && n <= 1.0 {
+                return v / n;
+            }
+        };
+        let axis = unit();
+        let dir = unit();
+        let rotation =
+            UnitQuaternion::from_scaled_axis(axis * self.degrees.to_radians()) * pose.rotation;
+        let translation = pose.translation.vector + dir * self.centimetres / 100.0;
+        Isometry3::from_parts(Translation3::from(translation), rotation)
+    }
+}
+
+/// A benchmark method running the tracker with one of the method presets.
+pub struct TrackerMethod {
+    name: String,
+    method: TrackingMethod,
+    config: TrackerConfig,
+    init_noise: Option<InitNoise>,
+    renderer: Box<dyn Fn() -> Result<Box<dyn Renderer + Send>, String>>,
+}
+
+impl TrackerMethod {
+    /// `method` with `base` parameters on the CPU renderer, no first-pose noise.
+    pub fn new(method: TrackingMethod, base: &TrackerConfig) -> Self {
+        Self {
+            name: method.name().into(),
+            method,
+            config: method.configure(base),
+            init_noise: None,
+            renderer: Box::new(|| Ok(Box::new(CpuRenderer::new()))),
+        }
+    }
+
+    /// The same method with its first pose perturbed (report name gets a `@DEG,CM` suffix).
+    pub fn with_init_noise(mut self, noise: InitNoise) -> Self {
+        self.name = format!(
+            "{}@{},{}",
+            self.method.name(),
+            noise.degrees,
+            noise.centimetres
+        );
+        self.init_noise = Some(noise);
+        self
+    }
+
+    /// The same method rendering with renderers from `make`.
+    pub fn with_renderer(
+        mut self,
+        make: impl Fn() -> Result<Box<dyn Renderer + Send>, String> + 'static,
+    ) -> Self {
+        self.renderer = Box::new(make);
+        self
+    }
+}
+
+impl Method for TrackerMethod {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn track(&mut self, input: &MethodInput<'_>) -> Result<Vec<PoseRecord>, EvalError> {
+        let rec = input.recording;
+        let (t0, gt0) = input.first_pose;
+        let first = self.init_noise.map_or(gt0, |n| n.apply(&gt0));
+        let object = recording_object(rec, input.object, t0, first)?;
+        let renderer = (self.renderer)().map_err(|reason| EvalError::Model {
+            object: input.object.into(),
+            reason: format!("renderer: {reason}"),
+        })?;
+        let mut tracker = EventTrack6d::new(
+            self.config.clone(),
+            recording_rig(rec)?,
+            vec![object],
+            renderer,
+        )
+        .map_err(|e| EvalError::Model {
+            object: input.object.into(),
+            reason: e.to_string(),
+        })?;
+        let mut out = Vec::with_capacity(input.ticks.len());
+        let name = input.object.to_string();
+        track_recording(
+            rec,
+            &mut tracker,
+            t0,
+            |_, estimates, _| {
+                for e in estimates {
+                    out.push(PoseRecord {
+                        t_us: e.t_us,
+                        object: name.clone(),
+                        pose: e.pose,
+                        quality: f64::from(e.quality),
+                        state: e.state.as_str().into(),
+                    });
+                }
+            },
+            |_| {},
+        )?;
+        Ok(out)
+    }
+}

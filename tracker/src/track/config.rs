@@ -1,0 +1,201 @@
+//! Tracker parameters and the method presets (`eventtrack6d`, `depth30`, `events-only`).
+
+use crate::recon::IntensityFilterConfig;
+use crate::refine::{DepthTerm, EventTerm};
+use serde::{Deserialize, Serialize};
+
+/// When the depth modality is used.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DepthUse {
+    /// `D_t` at every tick: the fresh frame at depth-exposure ticks, the carried `D_0` in between (ours).
+    EveryTick,
+    /// Only at depth-exposure ticks; no refinement in between (the `depth30` baseline holds the pose).
+    DepthFramesOnly,
+    /// Only the first depth frame (the `events-only` baseline).
+    FirstFrameOnly,
+    /// Never.
+    Off,
+}
+
+/// Quality thresholds that set the tracking state.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct QualityConfig {
+    /// Below this quality the state is `degraded`.
+    pub degraded_below: f32,
+    /// Below this quality for `lost_after_ticks` consecutive ticks the state is `lost`.
+    pub lost_below: f32,
+    /// Consecutive low-quality ticks before `lost` is raised.
+    pub lost_after_ticks: u32,
+}
+
+impl Default for QualityConfig {
+    fn default() -> Self {
+        Self {
+            degraded_below: 0.5,
+            lost_below: 0.2,
+            lost_after_ticks: 12,
+        }
+    }
+}
+
+/// All tracker parameters. Every field has a default; a TOML `[tracker]` table may override any of them.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TrackerConfig {
+    /// ROI output size, pixels (square).
+    pub roi_size: u32,
+    /// ROI side as a multiple of the object's projected diameter.
+    pub roi_scale: f64,
+    /// Gauss-Newton / Levenberg-Marquardt iterations per tick.
+    pub iterations: u32,
+    /// Levenberg-Marquardt damping relative to the diagonal.
+    pub damping: f64,
+    /// Depth modality schedule.
+    pub depth: DepthUse,
+    /// Whether the event modality is used.
+    pub events: bool,
+    /// Constant-velocity prediction on SE(3) (off: start from the previous pose).
+    pub prediction: bool,
+    /// Weight of the carried depth `D_t` between depth exposures relative to a fresh frame.
+    pub carried_depth_weight: f64,
+    /// Weight of the event term relative to the depth term.
+    pub event_weight: f64,
+    /// The short event window covers about this many pixels of predicted image motion.
+    pub event_window_px: f64,
+    /// Shortest event window, microseconds.
+    pub min_event_window_us: i64,
+    /// Longest event window, microseconds.
+    pub max_event_window_us: i64,
+    /// Largest rotation per refinement step, degrees (the paper: about 20).
+    pub max_step_rotation_deg: f64,
+    /// Largest translation per refinement step, object diameters (the paper: half).
+    pub max_step_translation_diameters: f64,
+    /// Most model surface samples per tick.
+    pub max_surface_points: usize,
+    /// Most silhouette samples per tick.
+    pub max_contour_points: usize,
+    /// Most event candidates per tick.
+    pub max_event_points: usize,
+    /// Velocity smoothing between depth frames: weight of the newest per-tick measurement in `[0, 1]`.
+    pub velocity_smoothing: f64,
+    /// Velocity smoothing at depth frames: weight of the motion measured since the previous depth frame.
+    pub velocity_smoothing_depth: f64,
+    /// Largest speed of the object centre the motion model accepts, m/s.
+    pub max_speed: f64,
+    /// Largest angular speed the motion model accepts, rad/s.
+    pub max_angular_speed: f64,
+    /// Standard deviation of the prior towards the predicted pose per tick: translation, metres.
+    pub prior_translation_m: f64,
+    /// Standard deviation of the prior towards the predicted pose per tick: rotation, degrees.
+    pub prior_rotation_deg: f64,
+    /// Intensity reconstruction.
+    pub intensity: IntensityFilterConfig,
+    /// Depth residual parameters.
+    pub depth_term: DepthTerm,
+    /// Event residual parameters.
+    pub event_term: EventTerm,
+    /// Quality thresholds.
+    pub quality: QualityConfig,
+}
+
+impl Default for TrackerConfig {
+    fn default() -> Self {
+        Self {
+            roi_size: 160,
+            roi_scale: 1.2,
+            iterations: 5,
+            damping: 1e-3,
+            depth: DepthUse::EveryTick,
+            events: true,
+            prediction: true,
+            carried_depth_weight: 0.3,
+            event_weight: 1.0,
+            event_window_px: 3.0,
+            min_event_window_us: 1_000,
+            max_event_window_us: 8_333,
+            max_step_rotation_deg: 20.0,
+            max_step_translation_diameters: 0.5,
+            max_surface_points: 600,
+            max_contour_points: 200,
+            max_event_points: 400,
+            velocity_smoothing: 0.2,
+            velocity_smoothing_depth: 0.7,
+            max_speed: 6.0,
+            max_angular_speed: 30.0,
+            prior_translation_m: 0.01,
+            prior_rotation_deg: 3.0,
+            intensity: IntensityFilterConfig::default(),
+            depth_term: DepthTerm::default(),
+            event_term: EventTerm::default(),
+            quality: QualityConfig::default(),
+        }
+    }
+}
+
+impl TrackerConfig {
+    /// [`Self::prior_rotation_deg`] in radians.
+    pub fn prior_rotation_rad(&self) -> f64 {
+        self.prior_rotation_deg.to_radians()
+    }
+}
+
+/// A named tracking method: ours or one of the baselines, all on the same tracker code.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TrackingMethod {
+    /// EventTrack6D: events + carried depth at every tick, fresh depth at exposures.
+    #[serde(rename = "eventtrack6d")]
+    EventTrack6d,
+    /// Render-and-compare on depth only at depth frames (30 Hz), pose held in between.
+    #[serde(rename = "depth30")]
+    Depth30,
+    /// Events only after the first depth frame.
+    EventsOnly,
+}
+
+impl TrackingMethod {
+    /// Every method, in report order.
+    pub const ALL: [TrackingMethod; 3] = [Self::EventTrack6d, Self::Depth30, Self::EventsOnly];
+
+    /// The method's name in configs, CLIs and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::EventTrack6d => "eventtrack6d",
+            Self::Depth30 => "depth30",
+            Self::EventsOnly => "events-only",
+        }
+    }
+
+    /// The method for a name, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// `base` with this method's modality schedule applied.
+    pub fn configure(self, base: &TrackerConfig) -> TrackerConfig {
+        let mut c = base.clone();
+        match self {
+            Self::EventTrack6d => {}
+            Self::Depth30 => {
+                c.depth = DepthUse::DepthFramesOnly;
+                c.events = false;
+                c.prediction = false;
+            }
+            Self::EventsOnly => {
+                c.velocity_smoothing = 0.5;
+                c.depth = DepthUse::FirstFrameOnly;
+                c.events = true;
+                c.prediction = true;
+            }
+        }
+        c
+    }
+}
+
+impl std::fmt::Display for TrackingMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}

@@ -1,0 +1,348 @@
+//! EventTrack6D: several objects tracked together from events and depth, each refined by render-and-compare in
+//! its own ROI, with mutual occlusion through the other objects' rendered masks.
+
+use super::config::{DepthUse, TrackerConfig};
+use super::object::{ObjectTrack, TickInputs};
+use super::{PoseEstimate, PoseTracker, TrackingState};
+use crate::geometry::{PinholeCamera, se3};
+use crate::mesh::Mesh;
+use crate::recon::{DepthRig, EventSurface};
+use crate::render::{RenderError, Renderer, Scene, SceneObject};
+use drivers::event::CdEvent;
+use drivers::recording::DepthFrame;
+use drivers::timeline::Tick;
+use nalgebra::{Isometry3, Vector3};
+use std::sync::Arc;
+
+/// Why a tracker could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum TrackError {
+    /// No object to track.
+    #[error("no object to track")]
+    NoObjects,
+    /// Too many objects for the renderer's mask labels.
+    #[error("{0} objects: at most 65534 can be tracked")]
+    TooManyObjects(usize),
+    /// An object's first pose is unusable.
+    #[error("object {object}: first pose is {reason}")]
+    BadFirstPose {
+        /// Object name.
+        object: String,
+        /// What is wrong.
+        reason: &'static str,
+    },
+    /// The renderer refused a mesh.
+    #[error("object {object}: {source}")]
+    Render {
+        /// Object name.
+        object: String,
+        /// The renderer's error.
+        source: RenderError,
+    },
+}
+
+/// An object to track: name, model and first pose.
+#[derive(Debug, Clone)]
+pub struct TrackedObject {
+    /// Name (as in the recording's ground truth and on the wire).
+    pub name: String,
+    /// The CAD model, metres.
+    pub mesh: Arc<Mesh>,
+    /// Diameter, metres (from `models_info.json`, or the mesh's own).
+    pub diameter: f64,
+    /// Time of the first pose, microseconds on the event camera's clock.
+    pub first_t_us: i64,
+    /// First pose `T_cam_obj`, event camera frame.
+    pub first_pose: Isometry3<f64>,
+}
+
+/// The cameras a tracker works with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackingRig {
+    /// Event camera intrinsics (poses are in this camera's frame).
+    pub event_camera: PinholeCamera,
+    /// Depth camera and its extrinsics.
+    pub depth: DepthRig,
+}
+
+/// Counters of what the tracker did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct TrackerCounters {
+    /// Ticks processed.
+    pub ticks: u64,
+    /// Depth frames used.
+    pub depth_frames: u64,
+    /// Depth frames that arrived without a matching tick and were replaced before use.
+    pub depth_frames_unused: u64,
+    /// Renders that failed (the object keeps its prediction for that tick).
+    pub render_errors: u64,
+}
+
+/// The EventTrack6D tracker (and, through [`super::TrackingMethod`], its baselines).
+pub struct EventTrack6d {
+    config: TrackerConfig,
+    names: Vec<String>,
+    rig: TrackingRig,
+    renderer: Box<dyn Renderer + Send>,
+    surface: EventSurface,
+    objects: Vec<ObjectTrack>,
+    scene: Vec<SceneObject>,
+    depth: DepthFrame,
+    depth_t_us: Option<i64>,
+    last_tick_us: Option<i64>,
+    counters: TrackerCounters,
+}
+
+impl std::fmt::Debug for EventTrack6d {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("EventTrack6d")
+            .field("objects", &self.names)
+            .field("counters", &self.counters)
+            .finish_non_exhaustive()
+    }
+}
+
+impl EventTrack6d {
+    /// A tracker of `objects` seen by `rig`, rendering with `renderer`.
+    pub fn new(
+        config: TrackerConfig,
+        rig: TrackingRig,
+        objects: Vec<TrackedObject>,
+        mut renderer: Box<dyn Renderer + Send>,
+    ) -> Result<Self, TrackError> {
+        if objects.is_empty() {
+            return Err(TrackError::NoObjects);
+        }
+        if objects.len() > 65534 {
+            return Err(TrackError::TooManyObjects(objects.len()));
+        }
+        let mut tracks = Vec::with_capacity(objects.len());
+        let mut scene = Vec::with_capacity(objects.len());
+        let mut names = Vec::with_capacity(objects.len());
+        for (k, o) in objects.into_iter().enumerate() {
+            let p = &o.first_pose;
+            if !(p.translation.vector.iter().all(|v| v.is_finite())
+                && p.rotation.coords.iter().all(|v| v.is_finite()))
+            {
+                return Err(TrackError::BadFirstPose {
+                    object: o.name,
+                    reason: "not finite",
+                });
+            }
+            if p.translation.z <= 0.0 {
+                return Err(TrackError::BadFirstPose {
+                    object: o.name,
+                    reason: "behind the camera (z <= 0)",
+                });
+            }
+            let mesh_id =
+                renderer
+                    .add_mesh(o.mesh.clone())
+                    .map_err(|source| TrackError::Render {
+                        object: o.name.clone(),
+                        source,
+                    })?;
+            let aabb = o.mesh.aabb();
+            let label = (k + 1) as u16;
+            let diameter = if o.diameter.is_finite() && o.diameter > 0.0 {
+                o.diameter
+            } else {
+                o.mesh.diameter()
+            };
+            tracks.push(ObjectTrack::new(
+                label,
+                diameter,
+                aabb.min.coords,
+                aabb.max.coords,
+                o.first_pose,
+                o.first_t_us,
+                &config,
+            ));
+            scene.push(SceneObject {
+                mesh: mesh_id,
+                pose: o.first_pose,
+                id: label,
+            });
+            names.push(o.name);
+        }
+        let cam = rig.event_camera;
+        let depth_cam = rig.depth.camera;
+        Ok(Self {
+            surface: EventSurface::new(cam.width, cam.height, config.intensity),
+            depth: DepthFrame {
+                index: 0,
+                width: depth_cam.width,
+                height: depth_cam.height,
+                depth_m: Vec::with_capacity(depth_cam.width as usize * depth_cam.height as usize),
+            },
+            config,
+            names,
+            rig,
+            renderer,
+            objects: tracks,
+            scene,
+            depth_t_us: None,
+            last_tick_us: None,
+            counters: TrackerCounters::default(),
+        })
+    }
+
+    /// Counters since creation.
+    pub fn counters(&self) -> TrackerCounters {
+        self.counters
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &TrackerConfig {
+        &self.config
+    }
+
+    /// The event state (reconstructed intensity and time surface).
+    pub fn event_surface(&self) -> &EventSurface {
+        &self.surface
+    }
+
+    /// The rig the tracker works with.
+    pub fn rig(&self) -> &TrackingRig {
+        &self.rig
+    }
+
+    /// Object-frame axis-aligned box centre of object `k`, metres (the point refinement rotates about).
+    pub fn object_center(&self, k: usize) -> Option<Vector3<f64>> {
+        self.objects.get(k).map(|o| o.center_obj)
+    }
+
+    /// Whether any object refines at this tick (the `depth30` baseline refines only at depth exposures).
+    fn refines(&self, depth_now: bool) -> bool {
+        self.config.depth != DepthUse::DepthFramesOnly || depth_now
+    }
+}
+
+impl PoseTracker for EventTrack6d {
+    fn objects(&self) -> &[String] {
+        &self.names
+    }
+
+    fn push_events(&mut self, events: &[CdEvent]) {
+        if self.config.events || self.config.depth != DepthUse::DepthFramesOnly {
+            self.surface.integrate(events);
+        }
+    }
+
+    fn push_depth(&mut self, t_us: i64, frame: &DepthFrame) {
+        if self.depth_t_us.is_some() {
+            self.counters.depth_frames_unused += 1;
+        }
+        self.depth.index = frame.index;
+        self.depth.width = frame.width;
+        self.depth.height = frame.height;
+        self.depth.depth_m.clear();
+        self.depth.depth_m.extend_from_slice(&frame.depth_m);
+        self.depth_t_us = Some(t_us);
+    }
+
+    fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
+        let t_us = tick.t_us;
+        let dt_s = self
+            .last_tick_us
+            .map(|t| (t_us - t) as f64 * 1e-6)
+            .unwrap_or(1.0 / 120.0)
+            .max(0.0);
+        self.last_tick_us = Some(t_us);
+        self.counters.ticks += 1;
+        // A depth frame belongs to this tick if it was exposed within half a tick period of it.
+        let depth_now = match self.depth_t_us {
+            Some(td) if (td - t_us).abs() <= 4_200 => true,
+            Some(td) if td < t_us - 4_200 => {
+                self.depth_t_us = None;
+                self.counters.depth_frames_unused += 1;
+                false
+            }
+            _ => false,
+        };
+        for o in &mut self.objects {
+            let step = (t_us - o.t_us) as f64 * 1e-6;
+            o.predict(step.max(0.0), &self.config);
+        }
+        for (s, o) in self.scene.iter_mut().zip(&self.objects) {
+            s.pose = o.predicted;
+        }
+        let refines = self.refines(depth_now);
+        let inputs = TickInputs {
+            t_us,
+            dt_s,
+            depth: depth_now.then_some(&self.depth),
+            surface: &self.surface,
+            camera: &self.rig.event_camera,
+            depth_rig: &self.rig.depth,
+        };
+        let scene = Scene::objects(&self.scene);
+        for o in &mut self.objects {
+            if t_us < o.t_us {
+                continue;
+            }
+            let dt_obj = inputs.dt_s;
+            let local = TickInputs {
+                dt_s: dt_obj,
+                ..inputs
+            };
+            let roi = if refines {
+                o.update_roi(&self.rig.event_camera, &self.config)
+            } else {
+                None
+            };
+            if let Some(roi) = roi {
+                if self
+                    .renderer
+                    .render_roi(&scene, &self.rig.event_camera, &roi, &mut o.target)
+                    .is_err()
+                {
+                    self.counters.render_errors += 1;
+                    o.roi = None;
+                }
+            }
+            o.refine(&local, &self.config);
+        }
+        if depth_now {
+            self.counters.depth_frames += 1;
+            self.depth_t_us = None;
+        }
+        out.extend(self.objects.iter().enumerate().map(|(k, o)| PoseEstimate {
+            object: k,
+            t_us,
+            pose: o.pose,
+            quality: o.quality,
+            state: o.state,
+        }));
+    }
+
+    fn event_surface(&self) -> Option<&EventSurface> {
+        Some(&self.surface)
+    }
+
+    fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
+        let o = self.objects.get(object)?;
+        self.last_tick_us?;
+        let pose = match o.previous {
+            Some((t0, p0)) if o.t_us > t0 => {
+                let s = (t_us - t0) as f64 / (o.t_us - t0) as f64;
+                // Interpolate, or extrapolate at most one tick period past the latest estimate.
+                let limit = 1.0 + 8_333.0 / (o.t_us - t0) as f64;
+                se3::interpolate(&p0, &o.pose, s.clamp(0.0, limit))
+            }
+            _ => o.pose,
+        };
+        let state = if t_us > o.t_us + 8_333 && o.state == TrackingState::Tracking {
+            TrackingState::Degraded
+        } else {
+            o.state
+        };
+        Some(PoseEstimate {
+            object,
+            t_us,
+            pose,
+            quality: o.quality,
+            state,
+        })
+    }
+}

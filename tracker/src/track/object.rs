@@ -1,0 +1,365 @@
+//! One tracked object's state and its per-tick refinement.
+
+use super::config::{DepthUse, TrackerConfig};
+use super::estimate::TrackingState;
+use crate::geometry::{PinholeCamera, Roi};
+use crate::recon::{CarriedDepth, DepthImage, DepthRig, EventSurface};
+use crate::refine::{
+    DepthTermStats, EventEdges, ModelView, NormalEquations, StepBounds, apply_step, solve_step,
+};
+use crate::render::RenderTarget;
+use drivers::recording::DepthFrame;
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3, Vector6};
+
+/// A tracked object: its model, its state and the buffers its refinement reuses every tick.
+#[derive(Debug)]
+pub(crate) struct ObjectTrack {
+    pub label: u16,
+    pub diameter: f64,
+    pub center_obj: Vector3<f64>,
+    pub aabb_min: Vector3<f64>,
+    pub aabb_max: Vector3<f64>,
+    /// Latest estimate and its time.
+    pub pose: Isometry3<f64>,
+    pub t_us: i64,
+    /// Estimate before the latest, for interpolation.
+    pub previous: Option<(i64, Isometry3<f64>)>,
+    /// Smoothed velocity of the centre (m/s) and angular velocity (rad/s), camera frame.
+    pub velocity: Vector6<f64>,
+    pub predicted: Isometry3<f64>,
+    /// The estimate at the latest fresh depth frame (time, pose).
+    anchor: Option<(i64, Isometry3<f64>)>,
+    pub quality: f32,
+    pub state: TrackingState,
+    low_ticks: u32,
+    depth_fit: f64,
+    depth_frames_used: u32,
+    pub roi: Option<Roi>,
+    pub target: RenderTarget,
+    view: ModelView,
+    carried: CarriedDepth,
+    depth_now: DepthImage,
+    edges: EventEdges,
+}
+
+/// Per-tick inputs shared by every object.
+pub(crate) struct TickInputs<'a> {
+    pub t_us: i64,
+    pub dt_s: f64,
+    pub depth: Option<&'a DepthFrame>,
+    pub surface: &'a EventSurface,
+    pub camera: &'a PinholeCamera,
+    pub depth_rig: &'a DepthRig,
+}
+
+impl ObjectTrack {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        label: u16,
+        diameter: f64,
+        aabb_min: Vector3<f64>,
+        aabb_max: Vector3<f64>,
+        pose: Isometry3<f64>,
+        t_us: i64,
+        config: &TrackerConfig,
+    ) -> Self {
+        let n = config.roi_size as usize;
+        Self {
+            label,
+            diameter,
+            center_obj: (aabb_min + aabb_max) * 0.5,
+            aabb_min,
+            aabb_max,
+            pose,
+            t_us,
+            previous: None,
+            velocity: Vector6::zeros(),
+            predicted: pose,
+            anchor: None,
+            quality: 1.0,
+            state: TrackingState::Tracking,
+            low_ticks: 0,
+            depth_fit: 1.0,
+            depth_frames_used: 0,
+            roi: None,
+            target: RenderTarget::with_capacity(config.roi_size, config.roi_size),
+            view: ModelView::with_capacity(config.max_surface_points, config.max_contour_points),
+            carried: CarriedDepth::new(),
+            depth_now: DepthImage {
+                width: config.roi_size,
+                height: config.roi_size,
+                z: Vec::with_capacity(n * n),
+            },
+            edges: EventEdges::default(),
+        }
+    }
+
+    /// The object's centre in the camera frame at `pose`.
+    pub fn center_at(&self, pose: &Isometry3<f64>) -> Point3<f64> {
+        pose * Point3::from(self.center_obj)
+    }
+
+    /// Predicts the pose `dt_s` after the latest estimate (constant velocity about the centre).
+    pub fn predict(&mut self, dt_s: f64, config: &TrackerConfig) {
+        self.predicted = if config.prediction && self.state != TrackingState::Lost {
+            apply_step(&self.pose, &self.center_obj, &(self.velocity * dt_s))
+        } else {
+            self.pose
+        };
+    }
+
+    /// The ROI around the predicted pose, if the object is in front of the camera.
+    pub fn update_roi(&mut self, camera: &PinholeCamera, config: &TrackerConfig) -> Option<Roi> {
+        let c = self.center_at(&self.predicted);
+        self.roi =
+            Roi::around_object(camera, &c, self.diameter, config.roi_scale, config.roi_size).ok();
+        self.roi
+    }
+
+    /// Image speed of the object's outline predicted from the velocity, full-image pixels per second.
+    fn image_speed(&self, camera: &PinholeCamera) -> f64 {
+        let c = self.center_at(&self.predicted);
+        let z = c.z.max(0.05);
+        let v = self.velocity;
+        let lateral = (v[0] * v[0] + v[1] * v[1]).sqrt() + (v[2].abs() * self.diameter * 0.5 / z);
+        let angular = Vector3::new(v[3], v[4], v[5]).norm() * self.diameter * 0.5;
+        camera.fx * (lateral + angular) / z
+    }
+
+    /// Refines the predicted pose at this tick from the render already in `self.target` (made at the predicted
+    /// poses of all objects) and updates quality, state and velocity.
+    pub fn refine(&mut self, inputs: &TickInputs<'_>, config: &TrackerConfig) {
+        let Some(roi) = self.roi else {
+            self.finish(inputs, self.predicted, None, None, config);
+            return;
+        };
+        let roi_camera = inputs.camera.crop(&roi);
+        let predicted = self.predicted;
+        self.view.extract(
+            &self.target,
+            &roi_camera,
+            self.label,
+            &predicted,
+            config.max_surface_points,
+            config.max_contour_points,
+        );
+
+        // Depth: which D_t is available at this tick, and its weight.
+        let fresh = inputs.depth.is_some()
+            && match config.depth {
+                DepthUse::EveryTick | DepthUse::DepthFramesOnly => true,
+                DepthUse::FirstFrameOnly => self.depth_frames_used == 0,
+                DepthUse::Off => false,
+            };
+        let mut depth_weight = 0.0;
+        if fresh {
+            if let Some(frame) = inputs.depth {
+                let c = self.center_at(&predicted);
+                let radius = 0.6 * config.roi_scale * self.diameter + 0.08;
+                self.carried
+                    .register(frame, inputs.depth_rig, &c, radius, inputs.t_us);
+                self.carried
+                    .render(&predicted, &roi_camera, &mut self.depth_now);
+                depth_weight = 1.0;
+            }
+        } else if config.depth == DepthUse::EveryTick && !self.carried.is_empty() {
+            self.carried
+                .render(&predicted, &roi_camera, &mut self.depth_now);
+            depth_weight = config.carried_depth_weight;
+        }
+        let refine_now = match config.depth {
+            DepthUse::DepthFramesOnly => fresh,
+            _ => true,
+        };
+        if !refine_now {
+            self.finish(inputs, self.pose, None, None, config);
+            return;
+        }
+
+        let depth_term = config.depth_term;
+        let event_term = config.event_term;
+        let use_events = config.events && !self.view.contour.is_empty();
+        let mut window_s = 0.0;
+        if use_events {
+            let speed = self.image_speed(inputs.camera).max(1.0);
+            let window = ((config.event_window_px / speed) * 1e6) as i64;
+            let window = window.clamp(config.min_event_window_us, config.max_event_window_us);
+            window_s = window as f64 * 1e-6;
+            self.edges.collect(
+                &event_term,
+                inputs.surface,
+                &roi,
+                self.target.mask(),
+                self.label,
+                inputs.t_us,
+                window,
+                config.max_event_points,
+            );
+        }
+        let bounds = StepBounds {
+            max_rotation: config.max_step_rotation_deg.to_radians(),
+            max_translation: config.max_step_translation_diameters * self.diameter,
+        };
+        let mut pose = predicted;
+        let mut depth_stats = None;
+        let mut offset = Vector6::zeros();
+        let prior_t = 1.0 / (config.prior_translation_m * config.prior_translation_m);
+        let prior_r = 1.0 / config.prior_rotation_rad().powi(2);
+        for it in 0..config.iterations {
+            let mut ne = NormalEquations::default();
+            if depth_weight > 0.0 {
+                let mut d = NormalEquations::default();
+                let s = depth_term.accumulate(
+                    &self.view,
+                    &pose,
+                    &self.center_obj,
+                    &roi_camera,
+                    &self.depth_now,
+                    &mut d,
+                );
+                depth_stats = Some(s);
+                ne.add_scaled(&d, depth_weight);
+            }
+            if use_events {
+                if it % 2 == 0 {
+                    self.edges.associate(
+                        &event_term,
+                        &self.view,
+                        &pose,
+                        &self.center_obj,
+                        inputs.camera,
+                        &self.velocity,
+                        window_s,
+                    );
+                }
+                let mut e = NormalEquations::default();
+                self.edges.accumulate(
+                    &event_term,
+                    &self.view,
+                    &pose,
+                    &self.center_obj,
+                    inputs.camera,
+                    &mut e,
+                );
+                ne.add_scaled(&e, config.event_weight);
+            }
+            // Prior towards the prediction: keeps directions the data cannot see (e.g. rotation about a
+            // symmetry axis) where the motion model puts them.
+            for k in 0..6 {
+                let w = if k < 3 { prior_t } else { prior_r };
+                ne.h[(k, k)] += w;
+                ne.g[k] += w * offset[k];
+            }
+            let Some(step) = solve_step(&ne, config.damping, &bounds) else {
+                break;
+            };
+            offset += step;
+            pose = apply_step(&pose, &self.center_obj, &step);
+            let (t, r) = (
+                step.fixed_rows::<3>(0).norm(),
+                step.fixed_rows::<3>(3).norm(),
+            );
+            if t < 1e-5 && r < 1e-4 {
+                break;
+            }
+        }
+        if fresh {
+            self.depth_frames_used += 1;
+            self.carried
+                .attach_to_object(&pose, &self.aabb_min, &self.aabb_max, 0.01);
+        }
+        let support = if use_events && self.image_speed(inputs.camera) > 150.0 {
+            self.edges.contour_support(&self.view, &pose, inputs.camera)
+        } else {
+            None
+        };
+        let fit = depth_stats.filter(|_| depth_weight >= 1.0);
+        self.finish(inputs, pose, fit, support, config);
+    }
+
+    /// Records the new estimate: quality, state, velocity and the pose history.
+    fn finish(
+        &mut self,
+        inputs: &TickInputs<'_>,
+        pose: Isometry3<f64>,
+        fresh_depth: Option<DepthTermStats>,
+        event_support: Option<f64>,
+        config: &TrackerConfig,
+    ) {
+        // Quality evidence: depth agreement at the last exposure, visibility, event support of the outline.
+        let mut visibility = 1.0;
+        if let Some(s) = fresh_depth {
+            let used = s.measured.max(1) as f64;
+            self.depth_fit = s.inliers as f64 / used;
+            visibility = (s.measured as f64 / s.points.max(1) as f64).min(1.0);
+        }
+        let in_view = self.roi.is_some() && self.view.visible_pixels > 0;
+        let support = event_support.unwrap_or(1.0);
+        let quality = if in_view {
+            self.depth_fit * (0.4 + 0.6 * visibility) * (0.6 + 0.4 * support)
+        } else {
+            0.0
+        };
+        self.quality = quality.clamp(0.0, 1.0) as f32;
+        let q = config.quality;
+        if self.quality < q.lost_below {
+            self.low_ticks += 1;
+        } else {
+            self.low_ticks = 0;
+        }
+        self.state = if self.low_ticks >= q.lost_after_ticks {
+            TrackingState::Lost
+        } else if self.quality < q.degraded_below {
+            TrackingState::Degraded
+        } else {
+            TrackingState::Tracking
+        };
+
+        // Velocity: at a fresh depth frame from the motion since the previous one (anchored on depth, so a drift
+        // the motion model itself introduced between frames is not fed back); otherwise from the last tick,
+        // weighted less.
+        let (reference, span, a) = match (fresh_depth.is_some(), self.anchor) {
+            (true, Some((t0, p0))) if inputs.t_us > t0 => (
+                p0,
+                (inputs.t_us - t0) as f64 * 1e-6,
+                config.velocity_smoothing_depth,
+            ),
+            _ => (self.pose, inputs.dt_s, config.velocity_smoothing),
+        };
+        if fresh_depth.is_some() {
+            self.anchor = Some((inputs.t_us, pose));
+        }
+        if span > 0.0 && self.state != TrackingState::Lost {
+            let c0 = self.center_at(&reference);
+            let c1 = self.center_at(&pose);
+            let dv = (c1 - c0) / span;
+            let dw = (pose.rotation * reference.rotation.inverse()).scaled_axis() / span;
+            let measured = Vector6::new(dv.x, dv.y, dv.z, dw.x, dw.y, dw.z);
+            let a = a.clamp(0.0, 1.0);
+            let mut v = a * measured + (1.0 - a) * self.velocity;
+            let lin = v.fixed_rows::<3>(0).norm();
+            if lin > config.max_speed {
+                v.fixed_rows_mut::<3>(0).scale_mut(config.max_speed / lin);
+            }
+            let ang = v.fixed_rows::<3>(3).norm();
+            if ang > config.max_angular_speed {
+                v.fixed_rows_mut::<3>(3)
+                    .scale_mut(config.max_angular_speed / ang);
+            }
+            self.velocity = v;
+        } else if self.state == TrackingState::Lost {
+            self.velocity = Vector6::zeros();
+        }
+        self.previous = Some((self.t_us, self.pose));
+        self.pose = normalise(pose);
+        self.t_us = inputs.t_us;
+    }
+}
+
+/// Re-normalises the rotation (drift from repeated composition).
+fn normalise(pose: Isometry3<f64>) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::from(pose.translation.vector),
+        UnitQuaternion::new_normalize(*pose.rotation.quaternion()),
+    )
+}
