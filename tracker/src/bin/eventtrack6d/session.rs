@@ -19,7 +19,7 @@ fn fmt_us(v: Option<f64>) -> String {
 /// Runs `config` to its end (or Ctrl-C) with a progress bar of `expected_ticks` on a terminal.
 pub fn execute(config: &Config, expected_ticks: Option<u64>) -> Result<Summary> {
     let bar = ProgressBar::with_draw_target(expected_ticks, ProgressDrawTarget::stderr());
-    let style = ProgressStyle::with_template("{spinner} [{bar:24}] {pos}/{len} ticks {msg}")
+    let style = ProgressStyle::with_template("{spinner} [{bar:16}] {pos}/{len} {msg}")
         .unwrap_or_else(|_| ProgressStyle::default_bar())
         .progress_chars("=> ");
     bar.set_style(style);
@@ -32,7 +32,7 @@ pub fn execute(config: &Config, expected_ticks: Option<u64>) -> Result<Summary> 
         let b = shared.lock().unwrap_or_else(|p| p.into_inner());
         b.set_position(h.ticks);
         b.set_message(format!(
-            "| {rate} | latency p50 {} p99 {} max {} | dropped events {}",
+            "{rate} | latency p50 {} p99 {} max {} | drops {}",
             fmt_us(l.p50_us),
             fmt_us(l.p99_us),
             fmt_us(l.max_us),
