@@ -1,2 +1,4 @@
 //! Shared helpers for the workspace-level end-to-end tests.
 pub mod dbc;
+/// A tracker in steady state on a generated recording (tick benchmark, no-allocation test).
+pub mod tick_fixture;

@@ -103,6 +103,9 @@ impl EventEdges {
         self.candidates.clear();
         self.association.clear();
         self.contour_match.clear();
+        // Sized once for the largest tick, so steady-state ticks do not allocate.
+        self.candidates.reserve(max_candidates + 1);
+        self.association.reserve(max_candidates + 1);
         self.stats = EventTermStats::default();
         let sx = f64::from(w) / roi.width;
         let sy = f64::from(h) / roi.height;
@@ -207,6 +210,8 @@ impl EventEdges {
         self.association.clear();
         self.contour_match.clear();
         self.sweep.clear();
+        self.contour_match.reserve(view.contour.capacity());
+        self.sweep.reserve(view.contour.capacity());
         let c = pose * nalgebra::Point3::from(*center_obj);
         let v = Vector3::new(motion[0], motion[1], motion[2]);
         let w = Vector3::new(motion[3], motion[4], motion[5]);

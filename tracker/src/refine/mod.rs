@@ -152,7 +152,13 @@ mod tests {
         let normals = [Vector3::x(), Vector3::y(), Vector3::z()];
         for n in &normals {
             for corner in 0..8 {
-                let sign = |bit: u32| if corner & (1 << bit) != 0 { 0.02 } else { -0.02 };
+                let sign = |bit: u32| {
+                    if corner & (1 << bit) != 0 {
+                        0.02
+                    } else {
+                        -0.02
+                    }
+                };
                 let p = Vector3::new(sign(0), sign(1), sign(2));
                 // r = n . (q - p') with q = p + truth: gradient wrt p' is -n.
                 let r = n.dot(&truth);

@@ -6,18 +6,26 @@ use super::config::{Config, ObjectConfig, SourceKind};
 use super::replay::ReplaySource;
 use super::source::{Source, SourceError};
 use crate::eval::{PoseTrack, ground_truth_objects};
+use crate::geometry::PinholeCamera;
+use crate::mesh::{MeshLoadOptions, load_obj};
 use crate::publish::PoseSink;
 use crate::publish::csv::CsvPoseSink;
-use crate::track::{HoldPoseTracker, PoseTracker};
+use crate::recon::DepthRig;
+use crate::render::CpuRenderer;
+use crate::track::{
+    EventTrack6d, HoldPoseTracker, PoseTracker, TrackedObject, TrackerConfig, TrackingMethod,
+    TrackingRig,
+};
 use drivers::event::{CdEvent, EventSink, TriggerEdge};
 use drivers::recording::{CameraRig, ModelInfo, Recording};
 use drivers::timeline::TimelineConfig;
-use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion};
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// Tracker methods [`build_tracker`] knows.
-pub const METHODS: &[&str] = &["static"];
+pub const METHODS: &[&str] = &["eventtrack6d", "depth30", "events-only", "static"];
 
 /// One object to track.
 #[derive(Debug, Clone)]
@@ -45,8 +53,8 @@ pub struct TrackerScene {
 
 /// Builds the tracker named `method` for `scene`.
 ///
-/// `static` holds every object's first pose (the plumbing test and benchmark floor). The real tracker
-/// (`eventtrack6d`) is added here by the tracker module.
+/// `eventtrack6d` is the tracker; `depth30` and `events-only` its baselines; `static` holds every object's first
+/// pose (the plumbing test and benchmark floor).
 pub fn build_tracker(
     method: &str,
     scene: &TrackerScene,
@@ -59,11 +67,58 @@ pub fn build_tracker(
                 .map(|o| (o.name.clone(), o.first_pose.1))
                 .collect(),
         ))),
+        name if TrackingMethod::from_name(name).is_some() => {
+            let method = TrackingMethod::from_name(name).ok_or_else(|| {
+                RuntimeError::Tracker(format!("tracker.method `{name}` is not known"))
+            })?;
+            Ok(Box::new(build_eventtrack6d(method, scene)?))
+        }
         other => Err(RuntimeError::Tracker(format!(
             "tracker.method `{other}` is not known (available: {})",
             METHODS.join(", ")
         ))),
     }
+}
+
+/// The EventTrack6D tracker (or one of its baselines) for `scene`, with default parameters and the CPU renderer.
+fn build_eventtrack6d(
+    method: TrackingMethod,
+    scene: &TrackerScene,
+) -> Result<EventTrack6d, RuntimeError> {
+    let camera = |c: &drivers::recording::CameraIntrinsics, what: &str| {
+        PinholeCamera::new(c.fx, c.fy, c.cx, c.cy, c.width, c.height)
+            .map_err(|e| RuntimeError::Tracker(format!("{what} intrinsics: {e}")))
+    };
+    let m = scene.rig.t_event_depth;
+    let r = Matrix3::new(
+        m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1], m[2][2],
+    );
+    let rig = TrackingRig {
+        event_camera: camera(&scene.rig.event_camera, "event camera")?,
+        depth: DepthRig {
+            camera: camera(&scene.rig.depth_camera, "depth camera")?,
+            event_from_depth: Isometry3::from_parts(
+                Translation3::new(m[0][3], m[1][3], m[2][3]),
+                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)),
+            ),
+        },
+    };
+    let mut objects = Vec::with_capacity(scene.objects.len());
+    for o in &scene.objects {
+        let loaded = load_obj(&o.mesh, &MeshLoadOptions::default())
+            .map_err(|e| RuntimeError::Tracker(format!("object {}: {e}", o.name)))?;
+        let mesh = Arc::new(loaded.mesh);
+        objects.push(TrackedObject {
+            name: o.name.clone(),
+            diameter: o.info.as_ref().map_or(mesh.diameter(), |i| i.diameter_m),
+            mesh,
+            first_t_us: o.first_pose.0,
+            first_pose: o.first_pose.1,
+        });
+    }
+    let config = method.configure(&TrackerConfig::default());
+    EventTrack6d::new(config, rig, objects, Box::new(CpuRenderer::new()))
+        .map_err(|e| RuntimeError::Tracker(e.to_string()))
 }
 
 fn pose_of(o: &ObjectConfig) -> Isometry3<f64> {

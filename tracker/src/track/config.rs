@@ -56,7 +56,8 @@ pub struct TrackerConfig {
     pub depth: DepthUse,
     /// Whether the event modality is used.
     pub events: bool,
-    /// Constant-velocity prediction on SE(3) (off: start from the previous pose).
+    /// Constant-velocity prediction on SE(3) (off: start from the previous pose). Off by default: on the dev
+    /// suite it lost more objects than it saved (see BENCHMARKS.md).
     pub prediction: bool,
     /// Weight of the carried depth `D_t` between depth exposures relative to a fresh frame.
     pub carried_depth_weight: f64,
@@ -109,7 +110,7 @@ impl Default for TrackerConfig {
             damping: 1e-3,
             depth: DepthUse::EveryTick,
             events: true,
-            prediction: true,
+            prediction: false,
             carried_depth_weight: 0.3,
             event_weight: 1.0,
             event_window_px: 3.0,
@@ -184,10 +185,8 @@ impl TrackingMethod {
                 c.prediction = false;
             }
             Self::EventsOnly => {
-                c.velocity_smoothing = 0.5;
                 c.depth = DepthUse::FirstFrameOnly;
                 c.events = true;
-                c.prediction = true;
             }
         }
         c

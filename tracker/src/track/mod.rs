@@ -20,7 +20,7 @@ pub use estimate::{PoseEstimate, TrackingState};
 pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, TrackingRig};
 pub use hold::HoldPoseTracker;
 pub use offline::{OfflineStats, track_recording};
-pub use overlay::{OverlayRenderer, OverlayWriter};
+pub use overlay::{OverlayRenderer, OverlayWriter, overlay_strip};
 
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;

@@ -111,6 +111,11 @@ impl ObjectTrack {
     /// The ROI around the predicted pose, if the object is in front of the camera.
     pub fn update_roi(&mut self, camera: &PinholeCamera, config: &TrackerConfig) -> Option<Roi> {
         let c = self.center_at(&self.predicted);
+        // Behind the camera: no ROI (checked here so the lost path does not build an error message per tick).
+        if !(c.z > 1e-3 && c.coords.iter().all(|v| v.is_finite())) {
+            self.roi = None;
+            return None;
+        }
         self.roi =
             Roi::around_object(camera, &c, self.diameter, config.roi_scale, config.roi_size).ok();
         self.roi

@@ -159,3 +159,146 @@ impl OverlayWriter {
         Ok(())
     }
 }
+
+/// Replays a pose file over its recording and plays back the poses as a tracker would report them (nearest
+/// record at or before each tick), so the offline driver can draw overlays of any method's output.
+struct PosePlayback {
+    names: Vec<String>,
+    /// Per object, its records in time order.
+    records: Vec<Vec<(i64, PoseEstimate)>>,
+    surface: EventSurface,
+}
+
+impl super::PoseTracker for PosePlayback {
+    fn objects(&self) -> &[String] {
+        &self.names
+    }
+    fn push_events(&mut self, events: &[drivers::event::CdEvent]) {
+        self.surface.integrate(events);
+    }
+    fn push_depth(&mut self, _t_us: i64, _frame: &drivers::recording::DepthFrame) {}
+    fn tick(&mut self, tick: &drivers::timeline::Tick, out: &mut Vec<PoseEstimate>) {
+        for k in 0..self.names.len() {
+            if let Some(e) = self.pose_at(k, tick.t_us) {
+                out.push(e);
+            }
+        }
+    }
+    fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
+        let r = self.records.get(object)?;
+        let i = r.partition_point(|(t, _)| *t <= t_us);
+        r.get(i.checked_sub(1)?)
+            .map(|(_, e)| PoseEstimate { t_us, ..*e })
+    }
+    fn event_surface(&self) -> Option<&EventSurface> {
+        Some(&self.surface)
+    }
+}
+
+/// An image strip of `frames` overlays spread over `recording`, each cropped to `crop` pixels around the first
+/// object: the reconstructed intensity with every object's outline at the pose `poses` gives at that tick.
+pub fn overlay_strip(
+    recording: &drivers::recording::Recording,
+    poses: &[crate::eval::PoseRecord],
+    frames: usize,
+    crop: u32,
+) -> Result<RgbImage, String> {
+    let mut names: Vec<String> = Vec::new();
+    for p in poses {
+        if !names.contains(&p.object) {
+            names.push(p.object.clone());
+        }
+    }
+    if names.is_empty() || frames == 0 {
+        return Err("no poses to draw".into());
+    }
+    let mut records = vec![Vec::new(); names.len()];
+    for p in poses {
+        let k = names.iter().position(|n| n == &p.object).unwrap_or(0);
+        let state = match p.state.as_str() {
+            "lost" => TrackingState::Lost,
+            "degraded" => TrackingState::Degraded,
+            _ => TrackingState::Tracking,
+        };
+        records[k].push((
+            p.t_us,
+            PoseEstimate {
+                object: k,
+                t_us: p.t_us,
+                pose: p.pose,
+                quality: p.quality as f32,
+                state,
+            },
+        ));
+    }
+    for r in &mut records {
+        r.sort_by_key(|(t, _)| *t);
+    }
+    let rig = super::recording_rig(recording).map_err(|e| e.to_string())?;
+    let meshes = names
+        .iter()
+        .map(|n| {
+            super::recording_object(recording, n, 0, nalgebra::Isometry3::identity())
+                .map(|o| o.mesh)
+                .map_err(|e| e.to_string())
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let cam = rig.event_camera;
+    let mut renderer = OverlayRenderer::new(cam, &meshes).map_err(|e| e.to_string())?;
+    let t_first = records[0].first().map_or(0, |(t, _)| *t);
+    let t_last = records[0].last().map_or(0, |(t, _)| *t);
+    let wanted: Vec<i64> = (0..frames)
+        .map(|i| t_first + (t_last - t_first) * (2 * i as i64 + 1) / (2 * frames as i64))
+        .collect();
+    let mut playback = PosePlayback {
+        names,
+        records,
+        surface: EventSurface::new(cam.width, cam.height, Default::default()),
+    };
+    let side = crop.min(cam.width).min(cam.height);
+    let mut strip = RgbImage::new(side * frames as u32, side);
+    let mut next = 0usize;
+    let mut error = None;
+    super::track_recording(
+        recording,
+        &mut playback,
+        t_first,
+        |tick, estimates, t| {
+            if next >= wanted.len() || tick.t_us < wanted[next] || error.is_some() {
+                return;
+            }
+            let Some(surface) = t.event_surface() else {
+                return;
+            };
+            match renderer.draw(surface, tick.t_us, estimates) {
+                Ok(img) => {
+                    let center = estimates
+                        .first()
+                        .and_then(|e| cam.project(&(e.pose * nalgebra::Point3::origin())))
+                        .unwrap_or(nalgebra::Point2::new(cam.cx, cam.cy));
+                    let x0 = (center.x as i64 - i64::from(side) / 2)
+                        .clamp(0, i64::from(cam.width - side)) as u32;
+                    let y0 = (center.y as i64 - i64::from(side) / 2)
+                        .clamp(0, i64::from(cam.height - side)) as u32;
+                    for y in 0..side {
+                        for x in 0..side {
+                            strip.put_pixel(
+                                next as u32 * side + x,
+                                y,
+                                *img.get_pixel(x0 + x, y0 + y),
+                            );
+                        }
+                    }
+                }
+                Err(e) => error = Some(e.to_string()),
+            }
+            next += 1;
+        },
+        |_| {},
+    )
+    .map_err(|e| e.to_string())?;
+    if let Some(e) = error {
+        return Err(e);
+    }
+    Ok(strip)
+}

@@ -3,7 +3,7 @@
 //! live progress, and prints poses published, rate, latency, drops and accuracy.
 
 use crate::{demo_sequence, session};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::Args;
 use drivers::recording::Recording;
 use std::path::{Path, PathBuf};
@@ -45,15 +45,23 @@ pub struct DemoArgs {
     pub no_zenoh: bool,
 }
 
-/// OVERLAY HOOK (the lead's overlay renderer plugs in here): write an image strip of the tracked object drawn at
-/// the published poses over the events of a few ticks into `out/overlay.png`, and return its path. Until the
-/// renderer lands nothing is written.
-fn write_overlay_strip(
-    _recording: &Path,
-    _poses_csv: &Path,
-    _out: &Path,
-) -> Result<Option<PathBuf>> {
-    Ok(None)
+/// Writes an image strip of six overlays (reconstructed intensity `I_t` with the model outline at the published
+/// pose) spread over the run into `out/overlay.png` and returns its path.
+fn write_overlay_strip(recording: &Path, poses_csv: &Path, out: &Path) -> Result<Option<PathBuf>> {
+    let rec = Recording::open(recording)?;
+    let text = std::fs::read_to_string(poses_csv)
+        .with_context(|| format!("reading {}", poses_csv.display()))?;
+    let poses =
+        tracker::eval::parse_pose_csv(&text).with_context(|| format!("{}", poses_csv.display()))?;
+    if poses.is_empty() {
+        return Ok(None);
+    }
+    let strip = tracker::track::overlay_strip(&rec, &poses, 6, 320).map_err(anyhow::Error::msg)?;
+    let path = out.join("overlay.png");
+    strip
+        .save(&path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(Some(path))
 }
 
 /// Runs the command.

@@ -1,0 +1,84 @@
+//! A tracker tick allocates nothing on the heap in steady state (DESIGN section 3): counted with a global
+//! allocator wrapper around the system allocator, over event, depth and plain ticks.
+
+use eventtrack6d_tests::tick_fixture::{mug_recording, steady_tracker};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use tracker::render::CpuRenderer;
+use tracker::track::{PoseTracker, TrackerConfig, TrackingMethod};
+
+struct Counting;
+
+static COUNTING: AtomicBool = AtomicBool::new(false);
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        if COUNTING.load(Ordering::Relaxed) {
+            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        }
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn steady_state_ticks_do_not_allocate() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = mug_recording(dir.path(), 0.25);
+    for method in TrackingMethod::ALL {
+        let config = method.configure(&TrackerConfig::default());
+        let mut s = steady_tracker(rec.clone(), config, Box::new(CpuRenderer::new()));
+        let mut out = Vec::with_capacity(4);
+        let events: Vec<_> = (0..2000u16)
+            .map(|i| drivers::event::CdEvent {
+                t_us: s.last_tick.t_us,
+                x: 500 + i % 200,
+                y: 300 + i / 200,
+                polarity: i % 3 == 0,
+            })
+            .collect();
+        // Warm up every buffer once (a depth tick and a plain tick), then count.
+        let mut depth_tick = s.last_tick;
+        depth_tick.depth_frame = Some(s.depth.index);
+        for _ in 0..2 {
+            s.tracker.push_events(&events);
+            s.tracker.push_depth(depth_tick.t_us, &s.depth);
+            out.clear();
+            s.tracker.tick(&depth_tick, &mut out);
+            out.clear();
+            s.tracker.tick(&s.last_tick, &mut out);
+        }
+        ALLOCATIONS.store(0, Ordering::SeqCst);
+        COUNTING.store(true, Ordering::SeqCst);
+        for k in 0..10 {
+            s.tracker.push_events(&events);
+            if k % 4 == 0 {
+                s.tracker.push_depth(depth_tick.t_us, &s.depth);
+                out.clear();
+                s.tracker.tick(&depth_tick, &mut out);
+            } else {
+                out.clear();
+                s.tracker.tick(&s.last_tick, &mut out);
+            }
+        }
+        COUNTING.store(false, Ordering::SeqCst);
+        let n = ALLOCATIONS.load(Ordering::SeqCst);
+        assert_eq!(out.len(), 1);
+        assert_eq!(
+            n, 0,
+            "{method}: {n} heap allocations in 10 steady-state ticks"
+        );
+    }
+}
