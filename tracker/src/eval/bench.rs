@@ -136,7 +136,7 @@ fn record(t_us: i64, object: &str, pose: Isometry3<f64>, quality: f64) -> PoseRe
 }
 
 /// Builds a method from its spec: a tracker method (`eventtrack6d`, `depth30`, `events-only`, optionally
-/// `NAME@DEG,CM` with a perturbed first pose), `static`, `gt-noise` (5 mm, 2 deg) or `gt-noise:MM:DEG`.
+/// `NAME@DEG:CM` with a perturbed first pose), `static`, `gt-noise` (5 mm, 2 deg) or `gt-noise:MM:DEG`.
 pub fn method_from_spec(spec: &str) -> Result<Box<dyn Method>, String> {
     let spec = spec.trim();
     if let Some(method) = crate::track::TrackingMethod::from_name(spec) {
@@ -147,7 +147,7 @@ pub fn method_from_spec(spec: &str) -> Result<Box<dyn Method>, String> {
     }
     if let Some((name, noise)) = spec.split_once('@') {
         if let Some(method) = crate::track::TrackingMethod::from_name(name) {
-            let noise = crate::track::InitNoise::parse(noise, 1)
+            let noise = crate::track::InitNoise::parse(&noise.replace(':', ","), 1)
                 .map_err(|e| format!("method `{spec}`: {e}"))?;
             return Ok(Box::new(
                 crate::track::TrackerMethod::new(method, &crate::track::TrackerConfig::default())
@@ -185,7 +185,7 @@ pub fn method_from_spec(spec: &str) -> Result<Box<dyn Method>, String> {
     }
     Err(format!(
         "unknown method `{spec}`: available are eventtrack6d, depth30, events-only (each optionally \
-         with a first-pose error NAME@DEG,CM), static, gt-noise, gt-noise:MM:DEG"
+         with a first-pose error NAME@DEG:CM), static, gt-noise, gt-noise:MM:DEG"
     ))
 }
 
