@@ -69,6 +69,8 @@ pub struct EventEdges {
     association: Vec<u32>,
     /// Per contour point, the nearest kept event bin along its image normal (full-image pixels), if any.
     contour_match: Vec<Option<[f64; 2]>>,
+    /// Contour points projected at the association pose, full-image pixels (NaN behind the camera).
+    projected: Vec<[f64; 2]>,
     /// Per contour point, how far (full-image pixels, along its outward normal) the predicted motion swept it
     /// during the event window: positive on leading edges, negative on trailing edges.
     sweep: Vec<f64>,
@@ -257,16 +259,26 @@ impl EventEdges {
             }
         }
         let max_d2 = term.max_distance_px * term.max_distance_px;
+        self.projected.clear();
+        self.projected.reserve(view.contour.capacity());
+        for cp in &view.contour {
+            let p = pose * cp.position;
+            self.projected.push(if p.z > 0.01 {
+                [
+                    camera.fx * p.x / p.z + camera.cx,
+                    camera.fy * p.y / p.z + camera.cy,
+                ]
+            } else {
+                [f64::NAN, f64::NAN]
+            });
+        }
         for e in &self.candidates {
             let mut best = (u32::MAX, max_d2);
-            for (k, cp) in view.contour.iter().enumerate() {
-                let p = pose * cp.position;
-                if p.z <= 0.01 {
-                    continue;
-                }
-                let du = camera.fx * p.x / p.z + camera.cx - e[0];
-                let dv = camera.fy * p.y / p.z + camera.cy - e[1];
+            for (k, q) in self.projected.iter().enumerate() {
+                let du = q[0] - e[0];
+                let dv = q[1] - e[1];
                 let d2 = du * du + dv * dv;
+                // NaN (behind the camera) never compares smaller.
                 if d2 < best.1 {
                     best = (k as u32, d2);
                 }
