@@ -696,7 +696,7 @@ mod tests {
         assert_eq!(c.source.pace, Pace::Realtime);
         assert!(c.sinks.zenoh && c.sinks.csv && c.can.enabled);
         assert!(c.can.candump_log.is_some() && c.can.interface.is_none());
-        assert_eq!(c.tracker.method, "static");
+        assert_eq!(c.tracker.method, "eventtrack6d");
     }
 
     #[test]
