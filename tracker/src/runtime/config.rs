@@ -221,7 +221,7 @@ pub struct LiveConfig {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrackerConfig {
-    /// Method name (`static`: hold the first pose; more as the tracker lands).
+    /// Method name: `eventtrack6d` (default), `depth30`, `events-only`, or `static` (hold the first pose).
     pub method: String,
     /// Real-time priority of the tracker thread: 0 = normal scheduling, 1..=99 = `SCHED_FIFO` at that priority
     /// (Linux; needs CAP_SYS_NICE or an rtprio limit; when refused the run carries on and says so).
@@ -231,7 +231,7 @@ pub struct TrackerConfig {
 impl Default for TrackerConfig {
     fn default() -> Self {
         Self {
-            method: "static".into(),
+            method: "eventtrack6d".into(),
             realtime_priority: 0,
         }
     }
