@@ -308,24 +308,14 @@ impl EventEdges {
             // Behind a trailing edge the object has just uncovered the background: events there are expected.
             let allowance = (-self.sweep.get(a as usize).copied().unwrap_or(0.0)).max(0.0);
             let p = pose * cp.position;
-            if p.z <= 0.01 {
+            let Some((offset, grad)) = normal_offset(camera, &p, cp.normal_2d, e) else {
                 continue;
-            }
-            let iz = 1.0 / p.z;
-            let u = camera.fx * p.x * iz + camera.cx;
-            let v = camera.fy * p.y * iz + camera.cy;
-            let [mx, my] = cp.normal_2d;
-            let r = mx * (e[0] - u) + my * (e[1] - v) - allowance;
+            };
+            let r = offset - allowance;
             if r <= 0.0 || r > term.max_distance_px {
                 continue;
             }
             active += 1;
-            // d r / d P = -m^T d pi / d P.
-            let grad = -Vector3::new(
-                mx * camera.fx * iz,
-                my * camera.fy * iz,
-                -(mx * camera.fx * p.x + my * camera.fy * p.y) * iz * iz,
-            );
             // Cauchy-like weight: full within a few sigma, fading beyond.
             let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
             ne.add_point(&grad, &(p - c), r, robust / (term.sigma_px * term.sigma_px));
@@ -349,25 +339,12 @@ impl EventEdges {
                 continue;
             }
             let p = pose * cp.position;
-            if p.z <= 0.01 {
+            let Some((r, grad)) = normal_offset(camera, &p, cp.normal_2d, e) else {
+                continue;
+            };
+            if r >= 0.0 || r.abs() > 2.0 * term.match_distance_px {
                 continue;
             }
-            let iz = 1.0 / p.z;
-            let u = camera.fx * p.x * iz + camera.cx;
-            let v = camera.fy * p.y * iz + camera.cy;
-            let [mx, my] = cp.normal_2d;
-            let r = mx * (e[0] - u) + my * (e[1] - v);
-            if r >= 0.0 {
-                continue;
-            }
-            if r.abs() > 2.0 * term.match_distance_px {
-                continue;
-            }
-            let grad = -Vector3::new(
-                mx * camera.fx * iz,
-                my * camera.fy * iz,
-                -(mx * camera.fx * p.x + my * camera.fy * p.y) * iz * iz,
-            );
             let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
             ne.add_point(&grad, &(p - c), r, term.match_weight * robust / s2);
         }
@@ -412,4 +389,29 @@ impl EventEdges {
         }
         Some(supported as f64 / view.contour.len() as f64)
     }
+}
+
+/// Offset of image point `e` from the projection of camera-frame point `p` along the unit image normal `m`
+/// (full-image pixels, positive outwards), and its gradient with respect to `p` (`-m^T d pi / d P`); `None`
+/// behind the camera.
+#[inline]
+fn normal_offset(
+    camera: &PinholeCamera,
+    p: &nalgebra::Point3<f64>,
+    m: [f64; 2],
+    e: &[f64; 2],
+) -> Option<(f64, Vector3<f64>)> {
+    if p.z <= 0.01 {
+        return None;
+    }
+    let iz = 1.0 / p.z;
+    let u = camera.fx * p.x * iz + camera.cx;
+    let v = camera.fy * p.y * iz + camera.cy;
+    let [mx, my] = m;
+    let grad = -Vector3::new(
+        mx * camera.fx * iz,
+        my * camera.fy * iz,
+        -(mx * camera.fx * p.x + my * camera.fy * p.y) * iz * iz,
+    );
+    Some((mx * (e[0] - u) + my * (e[1] - v), grad))
 }

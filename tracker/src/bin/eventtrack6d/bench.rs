@@ -36,28 +36,10 @@ pub struct BenchArgs {
     pub suites_dir: PathBuf,
 }
 
-fn hil_sim_executable() -> Option<PathBuf> {
-    let name = format!("hil-sim{}", std::env::consts::EXE_SUFFIX);
-    if let Ok(exe) = std::env::current_exe()
-        && let Some(dir) = exe.parent()
-    {
-        for cand in [dir.join(&name), dir.join("..").join(&name)] {
-            if cand.is_file() {
-                return Some(cand);
-            }
-        }
-    }
-    std::env::var_os("PATH").and_then(|paths| {
-        std::env::split_paths(&paths)
-            .map(|p| p.join(&name))
-            .find(|p| p.is_file())
-    })
-}
-
 /// Generates (or lets hil-sim reuse) the named suite and returns its directory.
 fn generate_suite(name: &str, suites_dir: &Path) -> Result<PathBuf> {
     let dir = suites_dir.join(name);
-    let Some(exe) = hil_sim_executable() else {
+    let Some(exe) = crate::demo_sequence::hil_sim_executable() else {
         bail!(
             "suite `{name}` must be generated but the hil-sim executable was found neither next to eventtrack6d nor \
              on PATH: run `cargo build --release -p hil-sim`, or `hil-sim suite --name {name} --out DIR` and pass \
