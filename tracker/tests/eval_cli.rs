@@ -155,3 +155,39 @@ fn bench_bad_inputs() {
         "sequences[0] has no string `name`",
     );
 }
+
+#[test]
+fn track_bad_inputs() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("poses.csv");
+    let out = out.to_str().unwrap();
+    let rec = d.to_str().unwrap();
+    fails_with(
+        &["track", rec, "--out", out, "--method", "magic"],
+        "unknown method `magic`",
+    );
+    fails_with(
+        &["track", rec, "--out", out, "--init-noise", "5"],
+        "expected DEG,CM",
+    );
+    fails_with(
+        &["track", rec, "--out", out, "--init-noise", "x,5"],
+        "degrees `x` is not a number",
+    );
+    let params = d.join("params.toml");
+    std::fs::write(&params, "roi_sise = 128\n").unwrap();
+    fails_with(
+        &[
+            "track",
+            rec,
+            "--out",
+            out,
+            "--params",
+            params.to_str().unwrap(),
+        ],
+        "roi_sise",
+    );
+    // Not a recording: the missing file is named.
+    fails_with(&["track", rec, "--out", out], "camera.json: is missing");
+}
