@@ -226,6 +226,8 @@ pub struct TrackerConfig {
     /// Real-time priority of the tracker thread: 0 = normal scheduling, 1..=99 = `SCHED_FIFO` at that priority
     /// (Linux; needs CAP_SYS_NICE or an rtprio limit; when refused the run carries on and says so).
     pub realtime_priority: u8,
+    /// Renderer of the tracker's render-and-compare: `cpu` (default, deterministic) or `gpu` (wgpu / Vulkan).
+    pub renderer: crate::render::RendererKind,
 }
 
 impl Default for TrackerConfig {
@@ -233,6 +235,7 @@ impl Default for TrackerConfig {
         Self {
             method: "eventtrack6d".into(),
             realtime_priority: 0,
+            renderer: crate::render::RendererKind::Cpu,
         }
     }
 }
@@ -718,6 +721,12 @@ mod tests {
         assert!(e.contains("invalid type"), "{e}");
         let e = parse("[source]\nkind = \"usb\"\n").unwrap_err().to_string();
         assert!(e.contains("`source.kind`") && e.contains("usb"), "{e}");
+        let e = parse("[source]\nkind = \"demo\"\n[tracker]\nrenderer = \"tpu\"\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`tracker.renderer`") && e.contains("tpu"), "{e}");
+        let c = parse("[source]\nkind = \"demo\"\n[tracker]\nrenderer = \"gpu\"\n").unwrap();
+        assert_eq!(c.tracker.renderer, crate::render::RendererKind::Gpu);
     }
 
     #[test]

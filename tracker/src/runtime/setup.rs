@@ -11,7 +11,7 @@ use crate::mesh::{MeshLoadOptions, load_obj};
 use crate::publish::PoseSink;
 use crate::publish::csv::CsvPoseSink;
 use crate::recon::DepthRig;
-use crate::render::CpuRenderer;
+use crate::render::{RendererKind, create_renderer};
 use crate::track::{
     EventTrack6d, HoldPoseTracker, PoseTracker, TrackedObject, TrackerConfig, TrackingMethod,
     TrackingRig,
@@ -57,6 +57,7 @@ pub struct TrackerScene {
 /// pose (the plumbing test and benchmark floor).
 pub fn build_tracker(
     method: &str,
+    renderer: RendererKind,
     scene: &TrackerScene,
 ) -> Result<Box<dyn PoseTracker>, RuntimeError> {
     match method {
@@ -71,7 +72,7 @@ pub fn build_tracker(
             let method = TrackingMethod::from_name(name).ok_or_else(|| {
                 RuntimeError::Tracker(format!("tracker.method `{name}` is not known"))
             })?;
-            Ok(Box::new(build_eventtrack6d(method, scene)?))
+            Ok(Box::new(build_eventtrack6d(method, renderer, scene)?))
         }
         other => Err(RuntimeError::Tracker(format!(
             "tracker.method `{other}` is not known (available: {})",
@@ -80,9 +81,10 @@ pub fn build_tracker(
     }
 }
 
-/// The EventTrack6D tracker (or one of its baselines) for `scene`, with default parameters and the CPU renderer.
+/// The EventTrack6D tracker (or one of its baselines) for `scene`, with default parameters and `renderer`.
 fn build_eventtrack6d(
     method: TrackingMethod,
+    renderer: RendererKind,
     scene: &TrackerScene,
 ) -> Result<EventTrack6d, RuntimeError> {
     let camera = |c: &drivers::recording::CameraIntrinsics, what: &str| {
@@ -117,7 +119,9 @@ fn build_eventtrack6d(
         });
     }
     let config = method.configure(&TrackerConfig::default());
-    EventTrack6d::new(config, rig, objects, Box::new(CpuRenderer::new()))
+    let renderer = create_renderer(renderer)
+        .map_err(|e| RuntimeError::Tracker(format!("tracker.renderer: {e}")))?;
+    EventTrack6d::new(config, rig, objects, renderer)
         .map_err(|e| RuntimeError::Tracker(e.to_string()))
 }
 

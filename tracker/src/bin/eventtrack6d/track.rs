@@ -7,7 +7,7 @@ use drivers::recording::Recording;
 use std::path::PathBuf;
 use std::time::Instant;
 use tracker::eval::{PoseRecord, PoseTrack, format_pose_csv, ground_truth_objects, parse_pose_csv};
-use tracker::render::{CpuRenderer, Renderer};
+use tracker::render::{Renderer, RendererKind, create_renderer};
 use tracker::track::{
     EventTrack6d, InitNoise, OverlayRenderer, OverlayWriter, TrackerConfig, TrackingMethod,
     recording_object, recording_rig, track_recording,
@@ -41,6 +41,9 @@ pub struct TrackArgs {
     /// Tracker parameters: a TOML file with the `[tracker]` table's keys at top level (see README).
     #[arg(long, value_name = "TOML")]
     pub params: Option<PathBuf>,
+    /// Renderer of the render-and-compare: cpu (deterministic) or gpu (wgpu / Vulkan; lavapipe without a GPU).
+    #[arg(long, default_value = "cpu")]
+    pub renderer: RendererKind,
     /// Also write overlay images (reconstructed intensity with the model outline at the estimate) into DIR.
     #[arg(long, value_name = "DIR")]
     pub overlay: Option<PathBuf>,
@@ -121,7 +124,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     let start = objects.iter().map(|o| o.first_t_us).min().unwrap_or(0);
     let meshes: Vec<_> = objects.iter().map(|o| o.mesh.clone()).collect();
     let rig = recording_rig(&rec)?;
-    let renderer: Box<dyn Renderer + Send> = Box::new(CpuRenderer::new());
+    let renderer: Box<dyn Renderer + Send> = create_renderer(args.renderer)?;
     let mut tracker = EventTrack6d::new(config, rig, objects, renderer)?;
     let mut overlay = match &args.overlay {
         Some(dir) => Some(OverlayWriter::new(
