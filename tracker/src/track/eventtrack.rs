@@ -301,7 +301,11 @@ impl PoseTracker for EventTrack6d {
                     o.roi = None;
                 }
             }
-            o.refine(&local, &self.config);
+            if refines {
+                o.refine(&local, &self.config);
+            } else {
+                o.hold(t_us);
+            }
         }
         if depth_now {
             self.counters.depth_frames += 1;

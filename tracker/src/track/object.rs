@@ -282,6 +282,13 @@ impl ObjectTrack {
         self.finish(inputs, pose, fit, support, config);
     }
 
+    /// Holds the latest estimate at `t_us` without refining (`depth30` between depth frames): pose, quality and
+    /// state stay what the last refinement said.
+    pub fn hold(&mut self, t_us: i64) {
+        self.previous = Some((self.t_us, self.pose));
+        self.t_us = t_us;
+    }
+
     /// Records the new estimate: quality, state, velocity and the pose history.
     fn finish(
         &mut self,
