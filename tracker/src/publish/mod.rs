@@ -49,6 +49,20 @@ pub enum PublishError {
     },
 }
 
+impl PublishError {
+    /// `Ok` when no pose of a tick failed, else the first failure's message as a transport error of `sink`
+    /// (the rest are counted in the sink's counters).
+    pub fn from_first(sink: &str, first_error: Option<String>) -> Result<(), PublishError> {
+        match first_error {
+            None => Ok(()),
+            Some(message) => Err(PublishError::Transport {
+                sink: sink.to_string(),
+                message,
+            }),
+        }
+    }
+}
+
 /// A destination for poses.
 pub trait PoseSink: Send {
     /// Short name for logs and the status topic (e.g. `zenoh`, `can:can0`, `candump:out.log`, `csv:poses.csv`).

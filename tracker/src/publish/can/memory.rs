@@ -77,13 +77,7 @@ impl PoseSink for MemorySink {
                 }
             }
         }
-        match first_error {
-            None => Ok(()),
-            Some(message) => Err(PublishError::Transport {
-                sink: self.name.clone(),
-                message,
-            }),
-        }
+        PublishError::from_first(&self.name, first_error)
     }
 
     fn counters(&self) -> SinkCounters {

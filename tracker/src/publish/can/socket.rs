@@ -275,13 +275,7 @@ impl PoseSink for SocketCanSink {
             drop(q);
             self.shared.notify.notify_one();
         }
-        match first_error {
-            None => Ok(()),
-            Some(message) => Err(PublishError::Transport {
-                sink: self.name.clone(),
-                message,
-            }),
-        }
+        PublishError::from_first(&self.name, first_error)
     }
 
     fn counters(&self) -> SinkCounters {
