@@ -392,5 +392,5 @@ impl TimerPlan {
 
 /// True when event pulse `index` coincides with a depth pulse (and so carries the phase code).
 pub fn is_coded(index: u64) -> bool {
-    index % u64::from(EVENT_PER_DEPTH) == 0
+    index.is_multiple_of(u64::from(EVENT_PER_DEPTH))
 }

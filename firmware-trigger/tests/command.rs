@@ -147,7 +147,7 @@ fn random_bytes_never_panic_and_every_line_gets_one_reply() {
         state ^= state >> 7;
         state ^= state << 17;
         let b = (state >> 24) as u8;
-        input.push(if b % 17 == 0 { b'\n' } else { b });
+        input.push(if b.is_multiple_of(17) { b'\n' } else { b });
     }
     let mut t = train();
     let replies = session(&mut t, &input);

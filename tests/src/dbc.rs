@@ -73,7 +73,11 @@ impl SignalSpec {
             let mut pos = self.start_bit;
             for _ in 0..self.size {
                 raw = (raw << 1) | bit(pos)?;
-                pos = if pos % 8 == 0 { pos + 15 } else { pos - 1 };
+                pos = if pos.is_multiple_of(8) {
+                    pos + 15
+                } else {
+                    pos - 1
+                };
             }
         }
         let mut v = raw as i128;
@@ -439,13 +443,13 @@ pub fn check_candump_against_csv(
                 p.object, p.t_us_low32
             )
         })?;
-        if let Some(t) = p.t_us {
-            if t as f64 != row[8] {
-                return Err(format!(
-                    "object {}: FD time {t} vs CSV {}",
-                    p.object, row[8]
-                ));
-            }
+        if let Some(t) = p.t_us
+            && t as f64 != row[8]
+        {
+            return Err(format!(
+                "object {}: FD time {t} vs CSV {}",
+                p.object, row[8]
+            ));
         }
         let [pos_res, quat_res, quality_res] = p.resolution;
         for k in 0..3 {

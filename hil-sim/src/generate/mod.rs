@@ -220,7 +220,7 @@ pub fn generate(
         .iter()
         .filter(|e| e.rising)
         .enumerate()
-        .filter(|(i, _)| *i as u32 % tl.ticks_per_depth == 0)
+        .filter(|(i, _)| (*i as u32).is_multiple_of(tl.ticks_per_depth))
         .enumerate()
         .map(|(n, (_, e))| (n as u64, e.t_us))
         .collect();

@@ -175,10 +175,10 @@ pub(super) fn copy_user_obj(obj: &Path, models: &Path, name: &str) -> Result<(),
                 if let Ok(m) = std::fs::read_to_string(dir.join(mtl)) {
                     for l in m.lines() {
                         let l = l.trim();
-                        if l.starts_with("map_") {
-                            if let Some(tex) = l.split_whitespace().last() {
-                                files.push(tex.to_string());
-                            }
+                        if l.starts_with("map_")
+                            && let Some(tex) = l.split_whitespace().last()
+                        {
+                            files.push(tex.to_string());
                         }
                     }
                 }

@@ -145,15 +145,15 @@ pub fn method_from_spec(spec: &str) -> Result<Box<dyn Method>, String> {
             &crate::track::TrackerConfig::default(),
         )));
     }
-    if let Some((name, noise)) = spec.split_once('@') {
-        if let Some(method) = crate::track::TrackingMethod::from_name(name) {
-            let noise = crate::track::InitNoise::parse(&noise.replace(':', ","), 1)
-                .map_err(|e| format!("method `{spec}`: {e}"))?;
-            return Ok(Box::new(
-                crate::track::TrackerMethod::new(method, &crate::track::TrackerConfig::default())
-                    .with_init_noise(noise),
-            ));
-        }
+    if let Some((name, noise)) = spec.split_once('@')
+        && let Some(method) = crate::track::TrackingMethod::from_name(name)
+    {
+        let noise = crate::track::InitNoise::parse(&noise.replace(':', ","), 1)
+            .map_err(|e| format!("method `{spec}`: {e}"))?;
+        return Ok(Box::new(
+            crate::track::TrackerMethod::new(method, &crate::track::TrackerConfig::default())
+                .with_init_noise(noise),
+        ));
     }
     if spec == "static" {
         return Ok(Box::new(StaticMethod));

@@ -125,13 +125,14 @@ impl EventEdges {
                 let row = j as usize * w as usize;
                 let mut x = x0;
                 while x < x1 {
-                    if let Some(t) = surface.last_event_us(x as u32, y as u32) {
-                        if t > since && t <= t_us {
-                            let i = ((x as f64 + 0.5 - roi.x) * sx) as i64;
-                            if i >= 0 && i < i64::from(w) {
-                                let cell = &mut self.hits[row + i as usize];
-                                *cell = cell.saturating_add(1);
-                            }
+                    if let Some(t) = surface.last_event_us(x as u32, y as u32)
+                        && t > since
+                        && t <= t_us
+                    {
+                        let i = ((x as f64 + 0.5 - roi.x) * sx) as i64;
+                        if i >= 0 && i < i64::from(w) {
+                            let cell = &mut self.hits[row + i as usize];
+                            *cell = cell.saturating_add(1);
                         }
                     }
                     x += step;
@@ -178,7 +179,7 @@ impl EventEdges {
                 if !self.kept[k] || mask.get(k).copied() == Some(id) {
                     continue;
                 }
-                if seen % stride == 0 {
+                if seen.is_multiple_of(stride) {
                     self.candidates.push([
                         roi.x - 0.5 + (i as f64 + 0.5) / sx,
                         roi.y - 0.5 + (j as f64 + 0.5) / sy,

@@ -103,13 +103,14 @@ impl ModelView {
                     }
                 }
                 if is_silhouette(mask, depth, w, h, u, v, id) {
-                    if boundary_seen % contour_step == 0 && self.contour.len() < max_contour {
-                        if let Some(n2) = outward_normal(mask, w, h, u, v, id) {
-                            self.contour.push(ContourPoint {
-                                position: inv * p_cam,
-                                normal_2d: n2,
-                            });
-                        }
+                    if boundary_seen.is_multiple_of(contour_step)
+                        && self.contour.len() < max_contour
+                        && let Some(n2) = outward_normal(mask, w, h, u, v, id)
+                    {
+                        self.contour.push(ContourPoint {
+                            position: inv * p_cam,
+                            normal_2d: n2,
+                        });
                     }
                     boundary_seen += 1;
                 }

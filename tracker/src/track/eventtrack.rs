@@ -291,15 +291,14 @@ impl PoseTracker for EventTrack6d {
             } else {
                 None
             };
-            if let Some(roi) = roi {
-                if self
+            if let Some(roi) = roi
+                && self
                     .renderer
                     .render_roi(&scene, &self.rig.event_camera, &roi, &mut o.target)
                     .is_err()
-                {
-                    self.counters.render_errors += 1;
-                    o.roi = None;
-                }
+            {
+                self.counters.render_errors += 1;
+                o.roi = None;
             }
             if refines {
                 o.refine(&local, &self.config);

@@ -145,7 +145,7 @@ impl OverlayWriter {
         t_us: i64,
         estimates: &[PoseEstimate],
     ) -> Result<(), String> {
-        if index % self.every != 0 {
+        if !index.is_multiple_of(self.every) {
             return Ok(());
         }
         let img = self

@@ -158,10 +158,10 @@ pub fn run(args: &TrackArgs) -> Result<()> {
                     state: e.state.as_str().into(),
                 });
             }
-            if let (Some(w), Some(surface)) = (overlay.as_mut(), t.event_surface()) {
-                if overlay_error.is_none() {
-                    overlay_error = w.tick(tick.index, surface, tick.t_us, estimates).err();
-                }
+            if let (Some(w), Some(surface)) = (overlay.as_mut(), t.event_surface())
+                && overlay_error.is_none()
+            {
+                overlay_error = w.tick(tick.index, surface, tick.t_us, estimates).err();
             }
         },
         |bytes| bar.set_position(bytes),

@@ -120,7 +120,7 @@ fn parse_timestamp(s: &str) -> Option<(u64, u32)> {
 
 fn parse_hex_bytes(s: &str, out: &mut [u8; 64]) -> Option<usize> {
     let b = s.as_bytes();
-    if b.len() % 2 != 0 || b.len() / 2 > 64 {
+    if !b.len().is_multiple_of(2) || b.len() / 2 > 64 {
         return None;
     }
     for (i, pair) in b.chunks_exact(2).enumerate() {
@@ -326,13 +326,7 @@ impl PoseSink for CandumpSink {
                 }
             }
         }
-        match first_error {
-            None => Ok(()),
-            Some(message) => Err(PublishError::Transport {
-                sink: self.name.clone(),
-                message,
-            }),
-        }
+        PublishError::from_first(&self.name, first_error)
     }
 
     fn counters(&self) -> SinkCounters {

@@ -156,15 +156,15 @@ impl CanConfig {
                 message: "must be at least 1".into(),
             });
         }
-        if let Some(iface) = &self.interface {
-            if iface.is_empty() || iface.len() > 15 || iface.contains(['/', ' ']) {
-                return Err(CanError::Config {
-                    key: "interface",
-                    message: format!(
-                        "`{iface}` is not a network interface name (1 to 15 characters, no `/` or space)"
-                    ),
-                });
-            }
+        if let Some(iface) = &self.interface
+            && (iface.is_empty() || iface.len() > 15 || iface.contains(['/', ' ']))
+        {
+            return Err(CanError::Config {
+                key: "interface",
+                message: format!(
+                    "`{iface}` is not a network interface name (1 to 15 characters, no `/` or space)"
+                ),
+            });
         }
         Ok(())
     }
