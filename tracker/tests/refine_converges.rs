@@ -111,32 +111,32 @@ fn depth_term_recovers_a_perturbed_pose() {
     }
 }
 
-#[test]
-fn event_term_moves_a_lagging_silhouette_onto_the_events() {
+/// Events of a moving textured cube at the true pose (every covered pixel fired at 10 ms), plus `extra` pixels
+/// (e.g. a hand holding it).
+fn cube_events(
+    extra: &dyn Fn(u32, u32) -> bool,
+) -> (
+    tracker::recon::EventSurface,
+    CpuRenderer,
+    tracker::render::MeshId,
+) {
     use drivers::event::CdEvent;
     use tracker::recon::{EventSurface, IntensityFilterConfig};
-    use tracker::refine::{EventEdges, EventTerm};
     let cam = common::vga();
-    let mesh = Arc::new(common::cube(0.1));
     let mut renderer = CpuRenderer::new();
-    let id = renderer.add_mesh(mesh).unwrap();
-    let t = truth();
-    // Events: every pixel the cube covers at the true pose fired at t = 10 ms (a moving textured object).
+    let id = renderer.add_mesh(Arc::new(common::cube(0.1))).unwrap();
     let mut full = RenderTarget::new();
+    let scene = [SceneObject {
+        mesh: id,
+        pose: truth(),
+        id: 1,
+    }];
     renderer
-        .render(
-            &Scene::objects(&[SceneObject {
-                mesh: id,
-                pose: t,
-                id: 1,
-            }]),
-            &cam,
-            &mut full,
-        )
+        .render(&Scene::objects(&scene), &cam, &mut full)
         .unwrap();
     let events: Vec<CdEvent> = (0..cam.height)
         .flat_map(|y| (0..cam.width).map(move |x| (x, y)))
-        .filter(|&(x, y)| full.mask()[(y * cam.width + x) as usize] == 1)
+        .filter(|&(x, y)| full.mask()[(y * cam.width + x) as usize] == 1 || extra(x, y))
         .map(|(x, y)| CdEvent {
             t_us: 10_000,
             x: x as u16,
@@ -146,43 +146,49 @@ fn event_term_moves_a_lagging_silhouette_onto_the_events() {
         .collect();
     let mut surface = EventSurface::new(cam.width, cam.height, IntensityFilterConfig::default());
     surface.integrate(&events);
-    // The hypothesis lags 8 mm to the left (about 10 px at 0.5 m).
-    let mut pose = Isometry3::from_parts(
-        Translation3::from(t.translation.vector - Vector3::new(0.008, 0.0, 0.0)),
-        t.rotation,
-    );
-    let term = EventTerm::default();
+    (surface, renderer, id)
+}
+
+/// Refines `start` with the event term alone (`rounds` re-renders) and returns the final pose.
+fn refine_events(
+    term: &tracker::refine::EventTerm,
+    surface: &tracker::recon::EventSurface,
+    renderer: &mut CpuRenderer,
+    id: tracker::render::MeshId,
+    start: Isometry3<f64>,
+    speed: f64,
+    rounds: usize,
+) -> Isometry3<f64> {
+    use tracker::refine::EventEdges;
+    let cam = common::vga();
     let center = Vector3::zeros();
     let bounds = StepBounds {
         max_rotation: 0.2,
         max_translation: 0.02,
     };
-    let before = (pose.translation.vector - t.translation.vector).norm();
+    let mut pose = start;
     let mut target = RenderTarget::new();
     let mut view = ModelView::with_capacity(600, 200);
     let mut edges = EventEdges::default();
-    // Moving right at 1 m/s: the event window's sweep makes the contour pull active.
-    let motion = nalgebra::Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-    for _ in 0..6 {
+    // Moving right at `speed` m/s: sets each contour point's expected band of events in the window.
+    let motion = nalgebra::Vector6::new(speed, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for _ in 0..rounds {
         let roi =
             Roi::around_object(&cam, &(pose * nalgebra::Point3::origin()), 0.17, 1.2, 160).unwrap();
         let roi_cam = cam.crop(&roi);
+        let scene = [SceneObject {
+            mesh: id,
+            pose,
+            id: 1,
+        }];
         renderer
-            .render(
-                &Scene::objects(&[SceneObject {
-                    mesh: id,
-                    pose,
-                    id: 1,
-                }]),
-                &roi_cam,
-                &mut target,
-            )
+            .render(&Scene::objects(&scene), &roi_cam, &mut target)
             .unwrap();
         view.extract(&target, &roi_cam, 1, &pose, 600, 200);
-        edges.collect(&term, &surface, &roi, target.mask(), 1, 10_000, 2_000, 400);
-        edges.associate(&term, &view, &pose, &center, &cam, &motion, 0.002);
+        edges.collect(term, surface, &roi, target.mask(), 1, 10_000, 2_000, 400);
+        edges.associate(term, &view, &pose, &center, &cam, &motion, 0.002);
         let mut ne = NormalEquations::default();
-        edges.accumulate(&term, &view, &pose, &center, &cam, &mut ne);
+        edges.accumulate(term, &view, &pose, &center, &cam, &mut ne);
         // A weak prior keeps the unobserved directions put.
         for k in 0..6 {
             ne.h[(k, k)] += 1e3;
@@ -192,9 +198,119 @@ fn event_term_moves_a_lagging_silhouette_onto_the_events() {
         };
         pose = apply_step(&pose, &center, &step);
     }
-    let after = (pose.translation.vector - t.translation.vector).norm();
+    pose
+}
+
+fn lateral(dx: f64) -> Isometry3<f64> {
+    let t = truth();
+    Isometry3::from_parts(
+        Translation3::from(t.translation.vector + Vector3::new(dx, 0.0, 0.0)),
+        t.rotation,
+    )
+}
+
+#[test]
+fn event_term_moves_a_lagging_silhouette_onto_the_events() {
+    use tracker::refine::{EventTerm, EventTermKind};
+    let (surface, mut renderer, id) = cube_events(&|_, _| false);
+    // The hypothesis lags 8 mm to the left (about 10 px at 0.5 m).
+    let before = 0.008;
+    // The hinge's inward pull needs a moving outline (1 m/s); the lines see a still outline's step as well.
+    for (kind, speed) in [(EventTermKind::Lines, 0.0), (EventTermKind::Hinge, 1.0)] {
+        let term = EventTerm {
+            kind,
+            ..EventTerm::default()
+        };
+        let pose = refine_events(
+            &term,
+            &surface,
+            &mut renderer,
+            id,
+            lateral(-before),
+            speed,
+            6,
+        );
+        let after = (pose.translation.vector - truth().translation.vector).norm();
+        assert!(
+            after < 0.35 * before,
+            "{kind:?}: translation error {before:.4} m -> {after:.4} m"
+        );
+    }
+}
+
+#[test]
+fn correspondence_lines_ignore_a_hand_next_to_the_object() {
+    use tracker::refine::{EventTerm, EventTermKind};
+    let cam = common::vga();
+    // A "hand": a 60 x 80 px block of events touching the cube's right side.
+    let c = truth() * nalgebra::Point3::origin();
+    let u = cam.fx * c.x / c.z + cam.cx;
+    let v = cam.fy * c.y / c.z + cam.cy;
+    let (x0, y0) = (u + 45.0, v - 40.0);
+    let hand = move |x: u32, y: u32| {
+        let (x, y) = (f64::from(x), f64::from(y));
+        x >= x0 && x < x0 + 60.0 && y >= y0 && y < y0 + 80.0
+    };
+    let (surface, mut renderer, id) = cube_events(&hand);
+    let mut error = |kind| {
+        let term = EventTerm {
+            kind,
+            ..EventTerm::default()
+        };
+        let pose = refine_events(&term, &surface, &mut renderer, id, truth(), 0.0, 6);
+        // Lateral error: the silhouette's scale says little about depth, which the depth term fixes.
+        (pose.translation.vector - truth().translation.vector)
+            .xy()
+            .norm()
+    };
+    let lines = error(EventTermKind::Lines);
+    let hinge = error(EventTermKind::Hinge);
+    // Starting at the truth, the lines stay within half a millimetre; the hinge is dragged towards the hand.
+    assert!(lines < 5e-4, "lines moved {lines:.4} m off the truth");
     assert!(
-        after < 0.35 * before,
-        "translation error {before:.4} m -> {after:.4} m"
+        hinge > 2.0 * lines,
+        "hinge {hinge:.4} m, lines {lines:.4} m"
+    );
+}
+
+#[test]
+fn outline_search_finds_a_shift_beyond_the_refinement_range() {
+    use tracker::refine::{EventEdges, EventTerm};
+    let cam = common::vga();
+    let (surface, mut renderer, id) = cube_events(&|_, _| false);
+    // 25 mm to the left at 0.5 m: about 26 px, beyond the residuals' 12 px reach.
+    let start = lateral(-0.025);
+    let term = EventTerm::default();
+    let roi =
+        Roi::around_object(&cam, &(start * nalgebra::Point3::origin()), 0.17, 1.2, 160).unwrap();
+    let roi_cam = cam.crop(&roi);
+    let mut target = RenderTarget::new();
+    let scene = [SceneObject {
+        mesh: id,
+        pose: start,
+        id: 1,
+    }];
+    renderer
+        .render(&Scene::objects(&scene), &roi_cam, &mut target)
+        .unwrap();
+    let mut view = ModelView::with_capacity(600, 200);
+    view.extract(&target, &roi_cam, 1, &start, 600, 200);
+    let mut edges = EventEdges::default();
+    edges.collect(&term, &surface, &roi, target.mask(), 1, 10_000, 2_000, 400);
+    let expected = 0.025 * cam.fx / 0.5;
+    let [du, dv] = edges
+        .search_shift(&term, &view, &start, &cam, 40.0)
+        .expect("a shift");
+    assert!(
+        (du - expected).abs() < 3.0 && dv.abs() < 3.0,
+        "found ({du:.1}, {dv:.1}) px, expected ({expected:.1}, 0)"
+    );
+    // A shorter range still moves towards the events, as far as it may.
+    let [du, dv] = edges
+        .search_shift(&term, &view, &start, &cam, 8.0)
+        .expect("a partial shift");
+    assert!(
+        du > 0.0 && du.hypot(dv) <= 8.0 * 2f64.sqrt() + 0.5,
+        "({du:.1}, {dv:.1}) px"
     );
 }

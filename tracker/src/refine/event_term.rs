@@ -13,10 +13,30 @@ use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::EventSurface;
 use nalgebra::{Isometry3, Vector3, Vector6};
 
+/// How events become residuals.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum EventTermKind {
+    /// Correspondence lines: along each contour point's image normal, the step from "events" (inside: the object's
+    /// texture and its swept band) to "no events" (the static background) is the outline; the residual is that
+    /// step's offset from the projected contour, less the band a trailing edge leaves. Lines whose outside is
+    /// full of events too (a hand, another object) find no step and drop out.
+    Lines,
+    /// Silhouette hinge: events outside the silhouette push it outwards, contour points with no event under
+    /// them are pulled in to the event cloud (biased by events next to the object, e.g. a holding hand).
+    Hinge,
+}
+
 /// Parameters of the event term.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct EventTerm {
+    /// Which residual the events give.
+    pub kind: EventTermKind,
+    /// Correspondence lines: length of each side of the step detector, ROI bins.
+    pub line_box_bins: u32,
+    /// Correspondence lines: smallest step contrast (fraction of occupied bins inside minus outside) accepted.
+    pub line_min_contrast: f64,
     /// Residual scale, full-image pixels.
     pub sigma_px: f64,
     /// Events farther than this from the silhouette (full-image pixels) are ignored.
@@ -30,17 +50,43 @@ pub struct EventTerm {
     /// Contour points whose predicted sweep in the window is below this (full-image pixels) expect no edge events
     /// and take no part in the contour-to-edge pull.
     pub min_sweep_px: f64,
+    /// Events up to this far outside the silhouette (full-image pixels) count as on it: the outline's own
+    /// anti-aliased pixels and the binning blur the edge by about a pixel.
+    pub edge_tolerance_px: f64,
+    /// Weight of the uncovered-event hinge.
+    pub hinge_weight: f64,
+    /// Before refining, the outline is searched for over image shifts up to this far (full-image pixels) for
+    /// the shift whose contour best separates events inside from none outside; 0 disables the search. Once the
+    /// motion is known the range shrinks to [`Self::search_speed_factor`] times the predicted image motion per
+    /// tick, but not below [`Self::search_min_px`].
+    pub search_px: f64,
+    /// Smallest search range, full-image pixels.
+    pub search_min_px: f64,
+    /// Search range as a multiple of the predicted image motion per tick.
+    pub search_speed_factor: f64,
+    /// A searched shift replaces the prediction only if its score beats the unshifted outline's by this
+    /// fraction of the contour points.
+    pub search_min_gain: f64,
 }
 
 impl Default for EventTerm {
     fn default() -> Self {
         Self {
+            kind: EventTermKind::Lines,
+            line_box_bins: 3,
+            line_min_contrast: 0.5,
             sigma_px: 1.5,
             max_distance_px: 12.0,
             min_neighbours: 2,
             match_distance_px: 6.0,
             match_weight: 0.5,
             min_sweep_px: 0.7,
+            edge_tolerance_px: 0.0,
+            hinge_weight: 1.0,
+            search_px: 30.0,
+            search_min_px: 8.0,
+            search_speed_factor: 2.0,
+            search_min_gain: 0.1,
         }
     }
 }
@@ -69,6 +115,10 @@ pub struct EventEdges {
     association: Vec<u32>,
     /// Per contour point, the nearest kept event bin along its image normal (full-image pixels), if any.
     contour_match: Vec<Option<[f64; 2]>>,
+    /// Per contour point, the outline step found on its correspondence line (full-image pixels) and its contrast.
+    line_match: Vec<Option<([f64; 2], f64)>>,
+    /// Contour points' inside and outside probe bins of the shift search (ROI grid).
+    probes: Vec<[[i32; 2]; 4]>,
     /// Contour points projected at the association pose, full-image pixels (NaN behind the camera).
     projected: Vec<[f64; 2]>,
     /// Per contour point, how far (full-image pixels, along its outward normal) the predicted motion swept it
@@ -231,6 +281,11 @@ impl EventEdges {
             self.sweep
                 .push((cp.normal_2d[0] * du + cp.normal_2d[1] * dv) * window_s);
         }
+        self.line_match.clear();
+        if term.kind == EventTermKind::Lines {
+            self.find_steps(term, view, pose, camera);
+            return;
+        }
         if let Some(roi) = self.roi {
             let sx = f64::from(self.width) / roi.width;
             let sy = f64::from(self.height) / roi.height;
@@ -288,6 +343,220 @@ impl EventEdges {
         }
     }
 
+    /// Searches image shifts of `view`'s outline at `pose` (within the term's search range) for the one whose
+    /// contour points best separate events inside from no events outside, up to `range_px` (full-image pixels).
+    /// Returns the shift in full-image pixels if it beats the unshifted outline clearly, else `None`.
+    pub fn search_shift(
+        &mut self,
+        term: &EventTerm,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        camera: &PinholeCamera,
+        range_px: f64,
+    ) -> Option<[f64; 2]> {
+        let roi = self.roi?;
+        if range_px <= 0.0 || view.contour.is_empty() {
+            return None;
+        }
+        let sx = f64::from(self.width) / roi.width;
+        let sy = f64::from(self.height) / roi.height;
+        let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+        // Contour points on the ROI grid with their inside / outside probe offsets (two bins each way).
+        self.probes.clear();
+        self.probes.reserve(view.contour.capacity());
+        for cp in &view.contour {
+            let Some(uv) = camera.project(&(pose * cp.position)) else {
+                continue;
+            };
+            let fi = (uv.x + 0.5 - roi.x) * sx - 0.5;
+            let fj = (uv.y + 0.5 - roi.y) * sy - 0.5;
+            let [mx, my] = cp.normal_2d;
+            let at = |d: f64| [(fi + d * mx).round() as i32, (fj + d * my).round() as i32];
+            self.probes.push([at(-1.0), at(-2.0), at(1.0), at(2.0)]);
+        }
+        if self.probes.is_empty() {
+            return None;
+        }
+        let kept = &self.kept;
+        let occ = |p: [i32; 2], di: i64, dj: i64| -> i64 {
+            let (i, j) = (i64::from(p[0]) + di, i64::from(p[1]) + dj);
+            i64::from(i >= 0 && j >= 0 && i < wi && j < hi && kept[(j * wi + i) as usize])
+        };
+        let score = |di: i64, dj: i64| -> i64 {
+            self.probes
+                .iter()
+                .map(|q| {
+                    occ(q[0], di, dj) + occ(q[1], di, dj) - occ(q[2], di, dj) - occ(q[3], di, dj)
+                })
+                .sum()
+        };
+        let range = (range_px * sx).round() as i64;
+        let base = score(0, 0);
+        let mut best = (base, 0i64, 0i64);
+        let coarse = 3i64;
+        let mut dj = -range;
+        while dj <= range {
+            let mut di = -range;
+            while di <= range {
+                let v = score(di, dj);
+                if v > best.0 {
+                    best = (v, di, dj);
+                }
+                di += coarse;
+            }
+            dj += coarse;
+        }
+        let (ci, cj) = (best.1, best.2);
+        for dj in (cj - coarse + 1).max(-range)..(cj + coarse).min(range + 1) {
+            for di in (ci - coarse + 1).max(-range)..(ci + coarse).min(range + 1) {
+                let v = score(di, dj);
+                if v > best.0 {
+                    best = (v, di, dj);
+                }
+            }
+        }
+        let gain = (best.0 - base) as f64 / (2 * self.probes.len()) as f64;
+        (gain >= term.search_min_gain && (best.1, best.2) != (0, 0))
+            .then(|| [best.1 as f64 / sx, best.2 as f64 / sy])
+    }
+
+    /// Finds, for every contour point of `view` at `pose`, the outline step on its correspondence line.
+    fn find_steps(
+        &mut self,
+        term: &EventTerm,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        camera: &PinholeCamera,
+    ) {
+        self.line_match.reserve(view.contour.capacity());
+        let Some(roi) = self.roi else {
+            self.line_match.resize(view.contour.len(), None);
+            return;
+        };
+        let sx = f64::from(self.width) / roi.width;
+        let sy = f64::from(self.height) / roi.height;
+        let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+        let k = term.line_box_bins.max(1) as i64;
+        for (cp, &sweep) in view.contour.iter().zip(&self.sweep) {
+            let p = pose * cp.position;
+            let Some(uv) = camera.project(&p) else {
+                self.line_match.push(None);
+                continue;
+            };
+            let fi = (uv.x + 0.5 - roi.x) * sx - 0.5;
+            let fj = (uv.y + 0.5 - roi.y) * sy - 0.5;
+            let [mx, my] = cp.normal_2d;
+            // The search reaches the largest expected offset plus the trailing band.
+            let reach = ((term.max_distance_px + sweep.abs()) * sx).ceil() as i64 + k;
+            // occupancy along the line, samples -reach..=reach (None outside the ROI)
+            let occ = |t: i64| -> Option<u8> {
+                let i = (fi + t as f64 * mx).round() as i64;
+                let j = (fj + t as f64 * my).round() as i64;
+                (i >= 0 && j >= 0 && i < wi && j < hi)
+                    .then(|| u8::from(self.kept[(j * wi + i) as usize]))
+            };
+            let expected = (-sweep).max(0.0) * sx;
+            let mut best: Option<(f64, f64)> = None;
+            // A step between samples b-1 and b: inside = [b-k, b), outside = [b, b+k).
+            let mut inside = 0i64;
+            let mut outside = 0i64;
+            let mut valid = true;
+            for t in -reach - k..-reach {
+                match occ(t) {
+                    Some(v) => inside += i64::from(v),
+                    None => valid = false,
+                }
+            }
+            for t in -reach..-reach + k {
+                match occ(t) {
+                    Some(v) => outside += i64::from(v),
+                    None => valid = false,
+                }
+            }
+            let mut invalid_until = if valid { i64::MIN } else { -reach + k };
+            for b in -reach..=reach {
+                if b > -reach {
+                    // slide: sample b-1 moves from outside to inside, b-1-k leaves inside, b+k-1 enters outside
+                    let (leave, mid, enter) = (occ(b - 1 - k), occ(b - 1), occ(b + k - 1));
+                    match (leave, mid, enter) {
+                        (Some(l), Some(m), Some(e)) => {
+                            inside += i64::from(m) - i64::from(l);
+                            outside += i64::from(e) - i64::from(m);
+                        }
+                        _ => {
+                            invalid_until = b + 2 * k;
+                            // recompute from scratch once the window is back inside the ROI
+                            inside = (b - k..b).filter_map(occ).map(i64::from).sum();
+                            outside = (b..b + k).filter_map(occ).map(i64::from).sum();
+                        }
+                    }
+                }
+                if b < invalid_until {
+                    continue;
+                }
+                let contrast = (inside - outside) as f64 / k as f64;
+                if contrast < term.line_min_contrast {
+                    continue;
+                }
+                // The step lies between samples b-1 and b; the contour point is the centre of the silhouette's
+                // last pixel, half a bin inside the outline, so the matching contour position is b - 1.
+                let at = b as f64 - 1.0;
+                let better = match best {
+                    None => true,
+                    Some((c, a)) => {
+                        contrast > c + 1e-9
+                            || ((contrast - c).abs() <= 1e-9
+                                && (at - expected).abs() < (a - expected).abs())
+                    }
+                };
+                if better {
+                    best = Some((contrast, at));
+                }
+            }
+            self.line_match.push(best.map(|(contrast, at)| {
+                let (i, j) = (fi + at * mx, fj + at * my);
+                (
+                    [roi.x - 0.5 + (i + 0.5) / sx, roi.y - 0.5 + (j + 0.5) / sy],
+                    contrast,
+                )
+            }));
+        }
+    }
+
+    /// Accumulates the correspondence-line residuals at `pose` into `ne`. Returns how many contributed.
+    fn accumulate_lines(
+        &mut self,
+        term: &EventTerm,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        center_obj: &Vector3<f64>,
+        camera: &PinholeCamera,
+        ne: &mut NormalEquations,
+    ) -> usize {
+        let c = pose * nalgebra::Point3::from(*center_obj);
+        let cutoff = 3.0 * term.sigma_px;
+        let s2 = term.sigma_px * term.sigma_px;
+        let mut active = 0;
+        for ((cp, m), &sweep) in view.contour.iter().zip(&self.line_match).zip(&self.sweep) {
+            let Some((e, contrast)) = m else {
+                continue;
+            };
+            let p = pose * cp.position;
+            let Some((offset, grad)) = normal_offset(camera, &p, cp.normal_2d, e) else {
+                continue;
+            };
+            let r = offset - (-sweep).max(0.0);
+            if r.abs() > term.max_distance_px {
+                continue;
+            }
+            active += 1;
+            let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
+            ne.add_point(&grad, &(p - c), r, contrast.min(1.0) * robust / s2);
+        }
+        self.stats.active = active;
+        active
+    }
+
     /// Accumulates the hinge residuals of the associated candidates at `pose` into `ne` (camera: the full event
     /// camera). Returns how many were active.
     pub fn accumulate(
@@ -299,6 +568,9 @@ impl EventEdges {
         camera: &PinholeCamera,
         ne: &mut NormalEquations,
     ) -> usize {
+        if term.kind == EventTermKind::Lines {
+            return self.accumulate_lines(term, view, pose, center_obj, camera, ne);
+        }
         let c = pose * nalgebra::Point3::from(*center_obj);
         let mut active = 0;
         let cutoff = 3.0 * term.sigma_px;
@@ -312,14 +584,19 @@ impl EventEdges {
             let Some((offset, grad)) = normal_offset(camera, &p, cp.normal_2d, e) else {
                 continue;
             };
-            let r = offset - allowance;
+            let r = offset - allowance - term.edge_tolerance_px;
             if r <= 0.0 || r > term.max_distance_px {
                 continue;
             }
             active += 1;
             // Cauchy-like weight: full within a few sigma, fading beyond.
             let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
-            ne.add_point(&grad, &(p - c), r, robust / (term.sigma_px * term.sigma_px));
+            ne.add_point(
+                &grad,
+                &(p - c),
+                r,
+                term.hinge_weight * robust / (term.sigma_px * term.sigma_px),
+            );
         }
         // The counterpart of the hinge: a moving textured object fills its silhouette with events, so a contour
         // point with no event under it but events a little inwards lies outside the object: pull it in to the

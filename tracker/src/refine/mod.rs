@@ -11,7 +11,7 @@ mod event_term;
 mod model_view;
 
 pub use depth_term::{DepthTerm, DepthTermStats};
-pub use event_term::{EventEdges, EventTerm, EventTermStats};
+pub use event_term::{EventEdges, EventTerm, EventTermKind, EventTermStats};
 pub use model_view::{ContourPoint, ModelView, SurfacePoint};
 
 use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};

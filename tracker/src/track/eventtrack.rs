@@ -212,6 +212,21 @@ impl EventTrack6d {
         self.objects.get(k).map(|o| o.center_obj)
     }
 
+    /// Replaces object `k`'s latest estimate with `pose` at `t_us` (a re-initialisation from an external detector
+    /// or operator, or a ground-truth probe): the next tick refines from it. The motion estimate is kept; the
+    /// state returns to `tracking`. Returns `false` for an unknown object or a non-finite pose.
+    pub fn reset_pose(&mut self, k: usize, t_us: i64, pose: Isometry3<f64>) -> bool {
+        let finite = pose.translation.vector.iter().all(|v| v.is_finite())
+            && pose.rotation.coords.iter().all(|v| v.is_finite());
+        match self.objects.get_mut(k) {
+            Some(o) if finite => {
+                o.reset(t_us, pose);
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// Whether any object refines at this tick (the `depth30` baseline refines only at depth exposures).
     fn refines(&self, depth_now: bool) -> bool {
         self.config.depth != DepthUse::DepthFramesOnly || depth_now

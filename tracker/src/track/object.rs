@@ -168,8 +168,7 @@ impl ObjectTrack {
                 depth_weight = 1.0;
             }
         } else if config.depth == DepthUse::EveryTick && !self.carried.is_empty() {
-            self.carried
-                .render(&predicted, &roi_camera, &mut self.depth_now);
+            // Rendered below, at the pose the refinement starts from.
             depth_weight = config.carried_depth_weight;
         }
         let refine_now = match config.depth {
@@ -206,6 +205,39 @@ impl ObjectTrack {
             max_translation: config.max_step_translation_diameters * self.diameter,
         };
         let mut pose = predicted;
+        // Until two depth frames have measured the motion, the whole range is searched.
+        let search_range = if self.depth_frames_used < 2 {
+            event_term.search_px
+        } else {
+            // max-then-min rather than clamp: a config with min > max must not panic (the range is then max).
+            (event_term.search_speed_factor * self.image_speed(inputs.camera) * inputs.dt_s)
+                .max(event_term.search_min_px)
+                .min(event_term.search_px)
+        };
+        if use_events
+            && let Some([du, dv]) = self.edges.search_shift(
+                &event_term,
+                &self.view,
+                &predicted,
+                inputs.camera,
+                search_range,
+            )
+        {
+            // Move the centre laterally by the image shift at its depth.
+            let c = self.center_at(&predicted);
+            let shift = Vector3::new(
+                du * c.z / inputs.camera.fx,
+                dv * c.z / inputs.camera.fy,
+                0.0,
+            );
+            pose = Isometry3::from_parts(
+                Translation3::from(predicted.translation.vector + shift),
+                predicted.rotation,
+            );
+        }
+        if depth_weight > 0.0 && !fresh {
+            self.carried.render(&pose, &roi_camera, &mut self.depth_now);
+        }
         let mut depth_stats = None;
         let mut offset = Vector6::zeros();
         let prior_t = 1.0 / (config.prior_translation_m * config.prior_translation_m);
@@ -280,6 +312,16 @@ impl ObjectTrack {
         };
         let fit = depth_stats.filter(|_| depth_weight >= 1.0);
         self.finish(inputs, pose, fit, support, config);
+    }
+
+    /// Replaces the latest estimate (see [`super::EventTrack6d::reset_pose`]).
+    pub fn reset(&mut self, t_us: i64, pose: Isometry3<f64>) {
+        self.previous = Some((self.t_us, self.pose));
+        self.pose = normalise(pose);
+        self.predicted = self.pose;
+        self.t_us = t_us;
+        self.low_ticks = 0;
+        self.state = TrackingState::Tracking;
     }
 
     /// Holds the latest estimate at `t_us` without refining (`depth30` between depth frames): pose, quality and
