@@ -56,9 +56,17 @@ pub struct TrackerConfig {
     pub depth: DepthUse,
     /// Whether the event modality is used.
     pub events: bool,
-    /// Constant-velocity prediction on SE(3) (off: start from the previous pose). Off by default: on the dev
-    /// suite it lost more objects than it saved (see BENCHMARKS.md).
+    /// Constant-velocity prediction on SE(3) (off: start from the previous pose), scaled by
+    /// [`Self::prediction_gain`].
     pub prediction: bool,
+    /// At a fresh depth frame, the depth-only refinement from the previous depth frame's pose replaces the
+    /// event-driven estimate when its fraction of agreeing model points is higher by more than this; negative
+    /// disables the check.
+    pub depth_fallback_margin: f64,
+    /// Fraction of the estimated velocity the prediction extrapolates with (1 = constant velocity).
+    pub prediction_gain: f64,
+    /// Whether the prediction also turns the object (off: it only moves it).
+    pub predict_rotation: bool,
     /// Weight of the carried depth `D_t` between depth exposures relative to a fresh frame.
     pub carried_depth_weight: f64,
     /// Weight of the event term relative to the depth term.
@@ -110,7 +118,10 @@ impl Default for TrackerConfig {
             damping: 1e-3,
             depth: DepthUse::EveryTick,
             events: true,
-            prediction: false,
+            prediction: true,
+            depth_fallback_margin: 0.05,
+            prediction_gain: 0.5,
+            predict_rotation: true,
             carried_depth_weight: 0.3,
             event_weight: 1.0,
             event_window_px: 3.0,

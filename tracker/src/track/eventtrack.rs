@@ -76,6 +76,8 @@ pub struct TrackerCounters {
     pub depth_frames_unused: u64,
     /// Renders that failed (the object keeps its prediction for that tick).
     pub render_errors: u64,
+    /// Depth frames at which the depth-only hypothesis replaced an object's event-driven estimate (all objects).
+    pub depth_fallbacks: u64,
 }
 
 /// The EventTrack6D tracker (and, through [`super::TrackingMethod`], its baselines).
@@ -189,7 +191,10 @@ impl EventTrack6d {
 
     /// Counters since creation.
     pub fn counters(&self) -> TrackerCounters {
-        self.counters
+        TrackerCounters {
+            depth_fallbacks: self.objects.iter().map(|o| o.fallbacks).sum(),
+            ..self.counters
+        }
     }
 
     /// The configuration in use.

@@ -32,6 +32,8 @@ pub(crate) struct ObjectTrack {
     pub quality: f32,
     pub state: TrackingState,
     low_ticks: u32,
+    /// Depth frames at which the depth-only hypothesis replaced the event-driven estimate.
+    pub fallbacks: u64,
     depth_fit: f64,
     depth_frames_used: u32,
     pub roi: Option<Roi>,
@@ -79,6 +81,7 @@ impl ObjectTrack {
             quality: 1.0,
             state: TrackingState::Tracking,
             low_ticks: 0,
+            fallbacks: 0,
             depth_fit: 1.0,
             depth_frames_used: 0,
             roi: None,
@@ -102,7 +105,11 @@ impl ObjectTrack {
     /// Predicts the pose `dt_s` after the latest estimate (constant velocity about the centre).
     pub fn predict(&mut self, dt_s: f64, config: &TrackerConfig) {
         self.predicted = if config.prediction && self.state != TrackingState::Lost {
-            apply_step(&self.pose, &self.center_obj, &(self.velocity * dt_s))
+            let mut xi = self.velocity * (dt_s * config.prediction_gain);
+            if !config.predict_rotation {
+                xi.fixed_rows_mut::<3>(3).fill(0.0);
+            }
+            apply_step(&self.pose, &self.center_obj, &xi)
         } else {
             self.pose
         };
@@ -298,6 +305,59 @@ impl ObjectTrack {
             );
             if t < 1e-5 && r < 1e-4 {
                 break;
+            }
+        }
+        // Safety net at a fresh depth frame: the depth-only refinement from the previous depth frame's pose
+        // (what `depth30` would report). If events led the estimate astray, the depth image says so: keep
+        // whichever hypothesis more model points agree with.
+        if fresh
+            && use_events
+            && config.depth_fallback_margin >= 0.0
+            && let Some((_, anchor)) = self.anchor
+        {
+            let mut fallback = anchor;
+            let mut fallback_offset = Vector6::zeros();
+            for _ in 0..config.iterations {
+                let mut ne = NormalEquations::default();
+                depth_term.accumulate(
+                    &self.view,
+                    &fallback,
+                    &self.center_obj,
+                    &roi_camera,
+                    &self.depth_now,
+                    &mut ne,
+                );
+                for k in 0..6 {
+                    let w = if k < 3 { prior_t } else { prior_r };
+                    ne.h[(k, k)] += w;
+                    ne.g[k] += w * fallback_offset[k];
+                }
+                let Some(step) = solve_step(&ne, config.damping, &bounds) else {
+                    break;
+                };
+                fallback_offset += step;
+                fallback = apply_step(&fallback, &self.center_obj, &step);
+            }
+            let fit = |pose: &Isometry3<f64>, view: &ModelView, depth: &DepthImage| {
+                let mut scratch = NormalEquations::default();
+                let s = depth_term.accumulate(
+                    view,
+                    pose,
+                    &self.center_obj,
+                    &roi_camera,
+                    depth,
+                    &mut scratch,
+                );
+                (s.inliers as f64 / s.points.max(1) as f64, s)
+            };
+            let (main_fit, main_stats) = fit(&pose, &self.view, &self.depth_now);
+            let (fallback_fit, fallback_stats) = fit(&fallback, &self.view, &self.depth_now);
+            if fallback_fit > main_fit + config.depth_fallback_margin {
+                pose = fallback;
+                depth_stats = Some(fallback_stats);
+                self.fallbacks += 1;
+            } else {
+                depth_stats = Some(main_stats);
             }
         }
         if fresh {

@@ -187,6 +187,12 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         out.len(),
         args.out.display()
     );
+    if counters.depth_fallbacks > 0 {
+        eprintln!(
+            "{} depth frames replaced an event-driven estimate by the depth-only one",
+            counters.depth_fallbacks
+        );
+    }
     if counters.render_errors > 0 || counters.depth_frames_unused > 0 {
         eprintln!(
             "warning: {} render errors, {} depth frames unused",
