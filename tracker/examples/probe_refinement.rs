@@ -1,10 +1,12 @@
 //! Probes the refinement on a recording with ground truth: before every tick the estimate is reset to the ground
-//! truth (`--mode bias`: at this tick, so any change is a bias of the residual terms) or to the ground truth one
-//! tick earlier (`--mode lag`: how much of one tick's motion a single refinement recovers). Prints the mean errors
-//! after refinement, split by ticks with a fresh depth frame and ticks between depth frames.
+//! truth (`--mode bias`: at this tick, so any change is a bias of the residual terms) or to the ground truth a
+//! fraction of a tick earlier (`--mode lag`, `--lag-fraction F`, default 1: how much of that motion a single
+//! refinement recovers). Prints the mean errors after refinement, split by ticks with a fresh depth frame and
+//! ticks between depth frames, and the rotation error per object axis. `--dump TICK WINDOW_US` writes
+//! `probe.png`: that tick's events of the last WINDOW_US with the true (green) and refined (red) outlines.
 //!
-//! `cargo run --release -p eventtrack6d --example probe_refinement -- REC [--mode bias|lag] [--method M]
-//! [--params TOML]`
+//! `cargo run --release -p eventtrack6d --example probe_refinement -- REC [--mode bias|lag] [--lag-fraction F]
+//! [--method M] [--params TOML] [--dump TICK WINDOW_US]`
 
 use drivers::event::CdEvent;
 use drivers::recording::{DepthFrame, Recording};
@@ -17,6 +19,17 @@ use tracker::track::{
     recording_rig, track_recording,
 };
 
+/// One probed tick: errors before and after the refinement (metres, radians).
+struct ProbeRow {
+    fresh_depth: bool,
+    start_translation: f64,
+    start_rotation: f64,
+    final_translation: f64,
+    final_rotation: f64,
+    /// Final translation error along the ground truth's motion over the tick.
+    final_along_motion: f64,
+}
+
 struct Probe {
     inner: EventTrack6d,
     gt: Vec<(i64, Isometry3<f64>)>,
@@ -24,9 +37,7 @@ struct Probe {
     lag_fraction: f64,
     last_tick: Option<i64>,
     depth_pending: bool,
-    /// (fresh depth, init translation error m, init rotation error rad, final translation error, final rotation
-    /// error, final error along the motion direction m)
-    rows: Vec<(bool, f64, f64, f64, f64, f64)>,
+    rows: Vec<ProbeRow>,
     dz: Vec<(bool, f64)>,
     rot_axes: [f64; 3],
     dump: Option<(usize, i64)>,
@@ -151,7 +162,14 @@ impl PoseTracker for Probe {
             } else {
                 0.0
             };
-            self.rows.push((self.depth_pending, ti, ri, tf, rf, along));
+            self.rows.push(ProbeRow {
+                fresh_depth: self.depth_pending,
+                start_translation: ti,
+                start_rotation: ri,
+                final_translation: tf,
+                final_rotation: rf,
+                final_along_motion: along,
+            });
             self.dz.push((
                 self.depth_pending,
                 e.pose.translation.z - truth.translation.z,
@@ -249,20 +267,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     track_recording(&rec, &mut probe, t0, |_, _, _| {}, |_| {})?;
     for fresh in [true, false] {
-        let rows: Vec<_> = probe.rows.iter().filter(|r| r.0 == fresh).collect();
+        let rows: Vec<&ProbeRow> = probe
+            .rows
+            .iter()
+            .filter(|r| r.fresh_depth == fresh)
+            .collect();
         let n = rows.len().max(1) as f64;
-        let mean = |f: &dyn Fn(&(bool, f64, f64, f64, f64, f64)) -> f64| {
-            rows.iter().map(|r| f(r)).sum::<f64>() / n
-        };
+        let mean = |f: fn(&ProbeRow) -> f64| rows.iter().map(|r| f(r)).sum::<f64>() / n;
         println!(
             "{:>8} ticks {:4}: init {:5.1} mm {:5.2} deg -> final {:5.1} mm {:5.2} deg (along motion {:+5.1} mm)",
             if fresh { "depth" } else { "between" },
             rows.len(),
-            mean(&|r| r.1) * 1e3,
-            mean(&|r| r.2.to_degrees()),
-            mean(&|r| r.3) * 1e3,
-            mean(&|r| r.4.to_degrees()),
-            mean(&|r| r.5) * 1e3,
+            mean(|r| r.start_translation) * 1e3,
+            mean(|r| r.start_rotation.to_degrees()),
+            mean(|r| r.final_translation) * 1e3,
+            mean(|r| r.final_rotation.to_degrees()),
+            mean(|r| r.final_along_motion) * 1e3,
         );
         let dz: Vec<f64> = probe
             .dz

@@ -1,12 +1,17 @@
-//! The event modality: recent events must lie on or inside the model's silhouette.
+//! The event modality. The static background produces no events; the tracked object (its outline sweeping over
+//! the background and its texture) does, and so do hands and other moving things.
 //!
-//! The static background produces no events; the tracked object (its outline sweeping over the background and its
-//! texture) does. Events of the short window `[t - dt, t]` that fall outside the silhouette at the hypothesis say
-//! the silhouette is in the wrong place: each is associated with its nearest contour point and contributes the
-//! hinge residual `max(0, m . (e - pi(P)))` (m: the contour's outward image normal, e: the event, pi(P): the
-//! projected contour point). A lagging estimate leaves its leading edge's events uncovered, an estimate ahead of the
-//! object leaves the trailing edge's events uncovered: both pull towards the object. Isolated (noise) events are
-//! removed first; far events (hands, other objects) are cut off by a robust weight.
+//! Default ([`EventTermKind::Lines`]): along each contour point's image normal, the events of the short window
+//! `[t - dt, t]` (binned on the ROI grid, isolated bins removed) should change from "present" (inside: texture and
+//! the band the outline swept) to "absent" (outside: background) at the outline. The step found on that line,
+//! less the band a trailing edge leaves behind (predicted from the velocity), gives the residual; its contrast is
+//! its weight, so a line with events on both sides (a holding hand) gives none. Before refining,
+//! [`EventEdges::search_shift`] looks for the image shift of the whole outline that best separates events inside
+//! from none outside, which reaches motions of a fast object (tens of pixels per tick) the residuals cannot.
+//!
+//! Alternative ([`EventTermKind::Hinge`]): events outside the silhouette contribute the hinge residual
+//! `max(0, m . (e - pi(P)))` and contour points with no event under them are pulled in to the event cloud. It is
+//! biased by events next to the object (see BENCHMARKS.md, "How the event term was chosen").
 
 use super::{ModelView, NormalEquations};
 use crate::geometry::{PinholeCamera, Roi};
