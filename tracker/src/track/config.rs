@@ -63,6 +63,9 @@ pub struct TrackerConfig {
     /// event-driven estimate when its fraction of agreeing model points is higher by more than this; negative
     /// disables the check.
     pub depth_fallback_margin: f64,
+    /// Whether a degraded or lost object searches the event term's whole shift range every tick (to catch up
+    /// with an object it fell behind) rather than the range its motion predicts.
+    pub search_wide_when_degraded: bool,
     /// Fraction of the estimated velocity the prediction extrapolates with (1 = constant velocity).
     pub prediction_gain: f64,
     /// Whether the prediction also turns the object (off: it only moves it).
@@ -120,6 +123,7 @@ impl Default for TrackerConfig {
             events: true,
             prediction: true,
             depth_fallback_margin: 0.05,
+            search_wide_when_degraded: false,
             prediction_gain: 0.5,
             predict_rotation: true,
             carried_depth_weight: 0.3,

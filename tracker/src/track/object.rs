@@ -212,8 +212,11 @@ impl ObjectTrack {
             max_translation: config.max_step_translation_diameters * self.diameter,
         };
         let mut pose = predicted;
-        // Until two depth frames have measured the motion, the whole range is searched.
-        let search_range = if self.depth_frames_used < 2 {
+        // Until two depth frames have measured the motion, and while the estimate is not trusted, the whole
+        // range is searched.
+        let search_range = if self.depth_frames_used < 2
+            || (config.search_wide_when_degraded && self.state != TrackingState::Tracking)
+        {
             event_term.search_px
         } else {
             // max-then-min rather than clamp: a config with min > max must not panic (the range is then max).
