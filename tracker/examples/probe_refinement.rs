@@ -212,6 +212,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--params" => {
                 let p = args.next().ok_or("--params needs a file")?;
                 base = toml::from_str(&std::fs::read_to_string(p)?)?;
+                base.validate()?;
             }
             "--lag-fraction" => lag_fraction = args.next().ok_or("--lag-fraction F")?.parse()?,
             "--dump" => {

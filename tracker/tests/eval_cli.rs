@@ -188,6 +188,19 @@ fn track_bad_inputs() {
         ],
         "roi_sise",
     );
+    // A known key out of range: named, with what it accepts.
+    std::fs::write(&params, "[event_term]\nsigma_px = 0.0\n").unwrap();
+    fails_with(
+        &[
+            "track",
+            rec,
+            "--out",
+            out,
+            "--params",
+            params.to_str().unwrap(),
+        ],
+        "`event_term.sigma_px` = 0: must be a finite number > 0",
+    );
     // Not a recording: the missing file is named.
     fails_with(&["track", rec, "--out", out], "camera.json: is missing");
 }

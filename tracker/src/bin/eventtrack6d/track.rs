@@ -64,8 +64,12 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("reading {}", path.display()))?;
-            toml::from_str::<TrackerConfig>(&text)
-                .with_context(|| format!("{}: invalid tracker parameters", path.display()))?
+            let config = toml::from_str::<TrackerConfig>(&text)
+                .with_context(|| format!("{}: invalid tracker parameters", path.display()))?;
+            config
+                .validate()
+                .with_context(|| format!("{}: invalid tracker parameters", path.display()))?;
+            config
         }
         None => TrackerConfig::default(),
     };

@@ -1,0 +1,267 @@
+//! Range checks of [`TrackerConfig`]: a parameter file is user input, and a value such as a zero prior or a NaN
+//! gain would otherwise turn into silent NaN poses. Every error names the TOML key.
+
+use super::config::TrackerConfig;
+
+/// A tracker parameter outside its valid range.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("tracker parameter `{key}` = {value}: {expected}")]
+pub struct InvalidParameter {
+    /// The TOML key (with its table, e.g. `event_term.sigma_px`).
+    pub key: &'static str,
+    /// The value given.
+    pub value: String,
+    /// What the key accepts.
+    pub expected: &'static str,
+}
+
+fn check(
+    key: &'static str,
+    value: f64,
+    ok: impl Fn(f64) -> bool,
+    expected: &'static str,
+) -> Result<(), InvalidParameter> {
+    if value.is_finite() && ok(value) {
+        Ok(())
+    } else {
+        Err(InvalidParameter {
+            key,
+            value: value.to_string(),
+            expected,
+        })
+    }
+}
+
+const POSITIVE: &str = "must be a finite number > 0";
+const NON_NEGATIVE: &str = "must be a finite number >= 0";
+const UNIT: &str = "must be a finite number in [0, 1]";
+
+impl TrackerConfig {
+    /// Checks every numeric parameter's range; the first offending key is reported.
+    pub fn validate(&self) -> Result<(), InvalidParameter> {
+        let pos = |v: f64| v > 0.0;
+        let non_neg = |v: f64| v >= 0.0;
+        let unit = |v: f64| (0.0..=1.0).contains(&v);
+        check(
+            "roi_size",
+            f64::from(self.roi_size),
+            |v| (16.0..=1024.0).contains(&v),
+            "must be 16 to 1024 pixels",
+        )?;
+        check(
+            "roi_scale",
+            self.roi_scale,
+            |v| (0.5..=4.0).contains(&v),
+            "must be 0.5 to 4 diameters",
+        )?;
+        check(
+            "iterations",
+            f64::from(self.iterations),
+            |v| v <= 100.0,
+            "must be at most 100",
+        )?;
+        check("damping", self.damping, non_neg, NON_NEGATIVE)?;
+        check(
+            "prediction_gain",
+            self.prediction_gain,
+            |v| (0.0..=2.0).contains(&v),
+            "must be 0 to 2",
+        )?;
+        check(
+            "depth_fallback_margin",
+            self.depth_fallback_margin,
+            |_| true,
+            "must be a finite number",
+        )?;
+        check(
+            "carried_depth_weight",
+            self.carried_depth_weight,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check("event_weight", self.event_weight, non_neg, NON_NEGATIVE)?;
+        check("event_window_px", self.event_window_px, pos, POSITIVE)?;
+        check(
+            "min_event_window_us",
+            self.min_event_window_us as f64,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "max_event_window_us",
+            self.max_event_window_us as f64,
+            |v| v >= self.min_event_window_us as f64,
+            "must be >= min_event_window_us",
+        )?;
+        check(
+            "max_step_rotation_deg",
+            self.max_step_rotation_deg,
+            pos,
+            POSITIVE,
+        )?;
+        check(
+            "max_step_translation_diameters",
+            self.max_step_translation_diameters,
+            pos,
+            POSITIVE,
+        )?;
+        check(
+            "max_surface_points",
+            self.max_surface_points as f64,
+            pos,
+            "must be at least 1",
+        )?;
+        check(
+            "max_contour_points",
+            self.max_contour_points as f64,
+            pos,
+            "must be at least 1",
+        )?;
+        check(
+            "max_event_points",
+            self.max_event_points as f64,
+            pos,
+            "must be at least 1",
+        )?;
+        check("velocity_smoothing", self.velocity_smoothing, unit, UNIT)?;
+        check(
+            "velocity_smoothing_depth",
+            self.velocity_smoothing_depth,
+            unit,
+            UNIT,
+        )?;
+        check("max_speed", self.max_speed, pos, POSITIVE)?;
+        check("max_angular_speed", self.max_angular_speed, pos, POSITIVE)?;
+        check(
+            "prior_translation_m",
+            self.prior_translation_m,
+            pos,
+            POSITIVE,
+        )?;
+        check("prior_rotation_deg", self.prior_rotation_deg, pos, POSITIVE)?;
+        check(
+            "intensity.contrast",
+            f64::from(self.intensity.contrast),
+            pos,
+            POSITIVE,
+        )?;
+        check(
+            "intensity.cutoff_hz",
+            f64::from(self.intensity.cutoff_hz),
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        let d = &self.depth_term;
+        check("depth_term.sigma_0", d.sigma_0, pos, POSITIVE)?;
+        check("depth_term.sigma_z2", d.sigma_z2, non_neg, NON_NEGATIVE)?;
+        check("depth_term.occlusion_gap", d.occlusion_gap, pos, POSITIVE)?;
+        check("depth_term.max_residual", d.max_residual, pos, POSITIVE)?;
+        let e = &self.event_term;
+        check(
+            "event_term.line_box_bins",
+            f64::from(e.line_box_bins),
+            |v| (1.0..=32.0).contains(&v),
+            "must be 1 to 32",
+        )?;
+        check(
+            "event_term.line_min_contrast",
+            e.line_min_contrast,
+            |v| v > 0.0 && v <= 1.0,
+            "must be in (0, 1]",
+        )?;
+        check("event_term.sigma_px", e.sigma_px, pos, POSITIVE)?;
+        check(
+            "event_term.max_distance_px",
+            e.max_distance_px,
+            pos,
+            POSITIVE,
+        )?;
+        check(
+            "event_term.match_distance_px",
+            e.match_distance_px,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "event_term.match_weight",
+            e.match_weight,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "event_term.min_sweep_px",
+            e.min_sweep_px,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "event_term.edge_tolerance_px",
+            e.edge_tolerance_px,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "event_term.hinge_weight",
+            e.hinge_weight,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "event_term.search_px",
+            e.search_px,
+            |v| (0.0..=200.0).contains(&v),
+            "must be 0 to 200 pixels",
+        )?;
+        check(
+            "event_term.search_min_px",
+            e.search_min_px,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "event_term.search_speed_factor",
+            e.search_speed_factor,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "event_term.search_min_gain",
+            e.search_min_gain,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        let q = &self.quality;
+        check(
+            "quality.degraded_below",
+            f64::from(q.degraded_below),
+            unit,
+            UNIT,
+        )?;
+        check("quality.lost_below", f64::from(q.lost_below), unit, UNIT)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid() {
+        assert_eq!(TrackerConfig::default().validate(), Ok(()));
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        let parse = |text: &str| toml::from_str::<TrackerConfig>(text).unwrap().validate();
+        let e = parse("prior_translation_m = 0.0").unwrap_err();
+        assert_eq!(e.key, "prior_translation_m");
+        let e = parse("prediction_gain = nan").unwrap_err();
+        assert!(e.to_string().contains("`prediction_gain` = NaN"), "{e}");
+        let e = parse("[event_term]\nsigma_px = -1.0").unwrap_err();
+        assert_eq!(e.key, "event_term.sigma_px");
+        let e = parse("min_event_window_us = 5000\nmax_event_window_us = 1000").unwrap_err();
+        assert_eq!(e.key, "max_event_window_us");
+        assert_eq!(parse("[event_term]\nsearch_px = 0.0"), Ok(()));
+    }
+}
