@@ -1,0 +1,146 @@
+//! Correspondence lines of [`EventEdges`]: the events-to-no-events step along each contour normal and its
+//! residuals.
+
+use super::{EventEdges, EventTerm, normal_offset};
+use crate::geometry::PinholeCamera;
+use crate::refine::{ModelView, NormalEquations};
+use nalgebra::{Isometry3, Vector3};
+
+impl EventEdges {
+    /// Finds, for every contour point of `view` at `pose`, the outline step on its correspondence line.
+    pub(super) fn find_steps(
+        &mut self,
+        term: &EventTerm,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        camera: &PinholeCamera,
+    ) {
+        self.line_match.reserve(view.contour.capacity());
+        let Some(roi) = self.roi else {
+            self.line_match.resize(view.contour.len(), None);
+            return;
+        };
+        let sx = f64::from(self.width) / roi.width;
+        let sy = f64::from(self.height) / roi.height;
+        let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+        let k = term.line_box_bins.max(1) as i64;
+        for (cp, &sweep) in view.contour.iter().zip(&self.sweep) {
+            let p = pose * cp.position;
+            let Some(uv) = camera.project(&p) else {
+                self.line_match.push(None);
+                continue;
+            };
+            let fi = (uv.x + 0.5 - roi.x) * sx - 0.5;
+            let fj = (uv.y + 0.5 - roi.y) * sy - 0.5;
+            let [mx, my] = cp.normal_2d;
+            // The search reaches the largest expected offset plus the trailing band.
+            let reach = ((term.max_distance_px + sweep.abs()) * sx).ceil() as i64 + k;
+            // occupancy along the line, samples -reach..=reach (None outside the ROI)
+            let occ = |t: i64| -> Option<u8> {
+                let i = (fi + t as f64 * mx).round() as i64;
+                let j = (fj + t as f64 * my).round() as i64;
+                (i >= 0 && j >= 0 && i < wi && j < hi)
+                    .then(|| u8::from(self.kept[(j * wi + i) as usize]))
+            };
+            let expected = (-sweep).max(0.0) * sx;
+            let mut best: Option<(f64, f64)> = None;
+            // A step between samples b-1 and b: inside = [b-k, b), outside = [b, b+k).
+            let mut inside = 0i64;
+            let mut outside = 0i64;
+            let mut valid = true;
+            for t in -reach - k..-reach {
+                match occ(t) {
+                    Some(v) => inside += i64::from(v),
+                    None => valid = false,
+                }
+            }
+            for t in -reach..-reach + k {
+                match occ(t) {
+                    Some(v) => outside += i64::from(v),
+                    None => valid = false,
+                }
+            }
+            let mut invalid_until = if valid { i64::MIN } else { -reach + k };
+            for b in -reach..=reach {
+                if b > -reach {
+                    // slide: sample b-1 moves from outside to inside, b-1-k leaves inside, b+k-1 enters outside
+                    let (leave, mid, enter) = (occ(b - 1 - k), occ(b - 1), occ(b + k - 1));
+                    match (leave, mid, enter) {
+                        (Some(l), Some(m), Some(e)) => {
+                            inside += i64::from(m) - i64::from(l);
+                            outside += i64::from(e) - i64::from(m);
+                        }
+                        _ => {
+                            invalid_until = b + 2 * k;
+                            // recompute from scratch once the window is back inside the ROI
+                            inside = (b - k..b).filter_map(occ).map(i64::from).sum();
+                            outside = (b..b + k).filter_map(occ).map(i64::from).sum();
+                        }
+                    }
+                }
+                if b < invalid_until {
+                    continue;
+                }
+                let contrast = (inside - outside) as f64 / k as f64;
+                if contrast < term.line_min_contrast {
+                    continue;
+                }
+                // The step lies between samples b-1 and b; the contour point is the centre of the silhouette's
+                // last pixel, half a bin inside the outline, so the matching contour position is b - 1.
+                let at = b as f64 - 1.0;
+                let better = match best {
+                    None => true,
+                    Some((c, a)) => {
+                        contrast > c + 1e-9
+                            || ((contrast - c).abs() <= 1e-9
+                                && (at - expected).abs() < (a - expected).abs())
+                    }
+                };
+                if better {
+                    best = Some((contrast, at));
+                }
+            }
+            self.line_match.push(best.map(|(contrast, at)| {
+                let (i, j) = (fi + at * mx, fj + at * my);
+                (
+                    [roi.x - 0.5 + (i + 0.5) / sx, roi.y - 0.5 + (j + 0.5) / sy],
+                    contrast,
+                )
+            }));
+        }
+    }
+
+    /// Accumulates the correspondence-line residuals at `pose` into `ne`. Returns how many contributed.
+    pub(super) fn accumulate_lines(
+        &mut self,
+        term: &EventTerm,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        center_obj: &Vector3<f64>,
+        camera: &PinholeCamera,
+        ne: &mut NormalEquations,
+    ) -> usize {
+        let c = pose * nalgebra::Point3::from(*center_obj);
+        let cutoff = 3.0 * term.sigma_px;
+        let s2 = term.sigma_px * term.sigma_px;
+        let mut active = 0;
+        for ((cp, m), &sweep) in view.contour.iter().zip(&self.line_match).zip(&self.sweep) {
+            let Some((e, contrast)) = m else {
+                continue;
+            };
+            let p = pose * cp.position;
+            let Some((offset, grad)) = normal_offset(camera, &p, cp.normal_2d, e) else {
+                continue;
+            };
+            let r = offset - (-sweep).max(0.0);
+            if r.abs() > term.max_distance_px {
+                continue;
+            }
+            active += 1;
+            let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
+            ne.add_point(&grad, &(p - c), r, contrast.min(1.0) * robust / s2);
+        }
+        self.stats.active = active;
+        active
+    }
+}

@@ -1,0 +1,86 @@
+//! The outline shift search of [`EventEdges`]: a coarse-to-fine search over image shifts of the whole outline,
+//! which reaches motions larger than the residuals' range.
+
+use super::{EventEdges, EventTerm};
+use crate::geometry::PinholeCamera;
+use crate::refine::ModelView;
+use nalgebra::Isometry3;
+
+impl EventEdges {
+    /// Searches image shifts of `view`'s outline at `pose` (within the term's search range) for the one whose
+    /// contour points best separate events inside from no events outside, up to `range_px` (full-image pixels).
+    /// Returns the shift in full-image pixels if it beats the unshifted outline clearly, else `None`.
+    pub fn search_shift(
+        &mut self,
+        term: &EventTerm,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        camera: &PinholeCamera,
+        range_px: f64,
+    ) -> Option<[f64; 2]> {
+        let roi = self.roi?;
+        if range_px <= 0.0 || view.contour.is_empty() {
+            return None;
+        }
+        let sx = f64::from(self.width) / roi.width;
+        let sy = f64::from(self.height) / roi.height;
+        let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+        // Contour points on the ROI grid with their inside / outside probe offsets (two bins each way).
+        self.probes.clear();
+        self.probes.reserve(view.contour.capacity());
+        for cp in &view.contour {
+            let Some(uv) = camera.project(&(pose * cp.position)) else {
+                continue;
+            };
+            let fi = (uv.x + 0.5 - roi.x) * sx - 0.5;
+            let fj = (uv.y + 0.5 - roi.y) * sy - 0.5;
+            let [mx, my] = cp.normal_2d;
+            let at = |d: f64| [(fi + d * mx).round() as i32, (fj + d * my).round() as i32];
+            self.probes.push([at(-1.0), at(-2.0), at(1.0), at(2.0)]);
+        }
+        if self.probes.is_empty() {
+            return None;
+        }
+        let kept = &self.kept;
+        let occ = |p: [i32; 2], di: i64, dj: i64| -> i64 {
+            let (i, j) = (i64::from(p[0]) + di, i64::from(p[1]) + dj);
+            i64::from(i >= 0 && j >= 0 && i < wi && j < hi && kept[(j * wi + i) as usize])
+        };
+        let score = |di: i64, dj: i64| -> i64 {
+            self.probes
+                .iter()
+                .map(|q| {
+                    occ(q[0], di, dj) + occ(q[1], di, dj) - occ(q[2], di, dj) - occ(q[3], di, dj)
+                })
+                .sum()
+        };
+        let range = (range_px * sx).round() as i64;
+        let base = score(0, 0);
+        let mut best = (base, 0i64, 0i64);
+        let coarse = 3i64;
+        let mut dj = -range;
+        while dj <= range {
+            let mut di = -range;
+            while di <= range {
+                let v = score(di, dj);
+                if v > best.0 {
+                    best = (v, di, dj);
+                }
+                di += coarse;
+            }
+            dj += coarse;
+        }
+        let (ci, cj) = (best.1, best.2);
+        for dj in (cj - coarse + 1).max(-range)..(cj + coarse).min(range + 1) {
+            for di in (ci - coarse + 1).max(-range)..(ci + coarse).min(range + 1) {
+                let v = score(di, dj);
+                if v > best.0 {
+                    best = (v, di, dj);
+                }
+            }
+        }
+        let gain = (best.0 - base) as f64 / (2 * self.probes.len()) as f64;
+        (gain >= term.search_min_gain && (best.1, best.2) != (0, 0))
+            .then(|| [best.1 as f64 / sx, best.2 as f64 / sy])
+    }
+}
