@@ -444,6 +444,43 @@ fn rendering_is_deterministic() {
 }
 
 #[test]
+fn geometry_only_render_keeps_geometry_and_skips_intensity() {
+    let (mut r, ids) = renderer_with(vec![sphere(0.08, 20, 40), square(2.0, Some(checker(4, 8)))]);
+    let objects = [SceneObject {
+        mesh: ids[0],
+        pose: at(0.03, 0.0, 0.5),
+        id: 1,
+    }];
+    let background = [BackgroundMesh {
+        mesh: ids[1],
+        pose: at(0.0, 0.0, 1.0),
+    }];
+    let full = Scene::objects(&objects).with_background(&background);
+    let cam = vga();
+    let (mut shaded, mut geometry) = (RenderTarget::new(), RenderTarget::new());
+    r.render(&full, &cam, &mut shaded).unwrap();
+    r.render(&full.geometry_only(), &cam, &mut geometry)
+        .unwrap();
+    assert_eq!(shaded.mask(), geometry.mask());
+    assert!(
+        shaded
+            .depth()
+            .iter()
+            .zip(geometry.depth())
+            .all(|(x, y)| x.to_bits() == y.to_bits())
+    );
+    assert!(
+        shaded
+            .normals()
+            .iter()
+            .zip(geometry.normals())
+            .all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits))
+    );
+    assert!(shaded.intensity().iter().any(|&i| i > 0.0));
+    assert!(geometry.intensity().iter().all(|&i| i == 0.0));
+}
+
+#[test]
 fn mask_ids_follow_mutual_occlusion() {
     let (mut r, ids) = renderer_with(vec![cube(0.1)]);
     let cam = vga();

@@ -104,6 +104,33 @@ impl EventSurface {
         (t != NEVER).then_some(t)
     }
 
+    /// Columns `x0, x0 + step, ...` below `x1` of row `y` whose latest event lies in `(since_us, until_us]`
+    /// (columns and rows outside the sensor yield nothing; `step` 0 counts as 1).
+    pub fn recent_in_row(
+        &self,
+        y: u32,
+        x0: u32,
+        x1: u32,
+        step: usize,
+        since_us: i64,
+        until_us: i64,
+    ) -> impl Iterator<Item = u32> + '_ {
+        let w = self.width as usize;
+        let row: &[i64] = if y < self.height {
+            &self.last_us[y as usize * w..(y as usize + 1) * w]
+        } else {
+            &[]
+        };
+        let x1 = (x1 as usize).min(row.len());
+        let x0 = (x0 as usize).min(x1);
+        row[x0..x1]
+            .iter()
+            .enumerate()
+            .step_by(step.max(1))
+            .filter(move |&(_, &t)| t != NEVER && t > since_us && t <= until_us)
+            .map(move |(i, _)| (x0 + i) as u32)
+    }
+
     /// Reconstructed log intensity at pixel `(x, y)` at time `t_us` (0 outside the sensor).
     #[inline]
     pub fn log_intensity_at(&self, x: u32, y: u32, t_us: i64) -> f32 {

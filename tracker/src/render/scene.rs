@@ -64,6 +64,9 @@ pub struct Scene<'a> {
     pub lighting: Lighting,
     /// Near clipping distance along z, metres (> 0); surfaces closer than this are cut away.
     pub near: f64,
+    /// Whether the intensity channel is wanted. When `false` a backend may skip texturing and lighting and leave
+    /// intensity at 0 (the CPU renderer does); depth, normals and mask are unaffected.
+    pub shade_intensity: bool,
 }
 
 impl<'a> Scene<'a> {
@@ -77,6 +80,15 @@ impl<'a> Scene<'a> {
             background: &[],
             lighting: Lighting::default(),
             near: Self::DEFAULT_NEAR,
+            shade_intensity: true,
+        }
+    }
+
+    /// The same scene without the intensity channel (geometry for tracking: depth, normals, mask).
+    pub fn geometry_only(self) -> Self {
+        Self {
+            shade_intensity: false,
+            ..self
         }
     }
 

@@ -296,7 +296,8 @@ impl PoseTracker for EventTrack6d {
             camera: &self.rig.event_camera,
             depth_rig: &self.rig.depth,
         };
-        let scene = Scene::objects(&self.scene);
+        // The tracker compares geometry only: no texturing.
+        let scene = Scene::objects(&self.scene).geometry_only();
         for o in &mut self.objects {
             if t_us < o.t_us {
                 continue;

@@ -1,7 +1,7 @@
 //! Correspondence lines of [`EventEdges`]: the events-to-no-events step along each contour normal and its
 //! residuals.
 
-use super::{EventEdges, EventTerm, normal_offset};
+use super::{EventEdges, EventTerm, grid_index, normal_offset};
 use crate::geometry::PinholeCamera;
 use crate::refine::{ModelView, NormalEquations};
 use nalgebra::{Isometry3, Vector3};
@@ -35,12 +35,22 @@ impl EventEdges {
             let [mx, my] = cp.normal_2d;
             // The search reaches the largest expected offset plus the trailing band.
             let reach = ((term.max_distance_px + sweep.abs()) * sx).ceil() as i64 + k;
-            // occupancy along the line, samples -reach..=reach (None outside the ROI)
+            // Occupancy along the line, sampled once: samples -reach-k..reach+k (-1 outside the ROI).
+            let first = -reach - k;
+            self.line_samples.clear();
+            self.line_samples.extend((first..reach + k).map(|t| {
+                let i = grid_index(fi + t as f64 * mx);
+                let j = grid_index(fj + t as f64 * my);
+                if i >= 0 && j >= 0 && i < wi && j < hi {
+                    i8::from(self.kept[(j * wi + i) as usize])
+                } else {
+                    -1
+                }
+            }));
+            let samples = &self.line_samples;
             let occ = |t: i64| -> Option<u8> {
-                let i = (fi + t as f64 * mx).round() as i64;
-                let j = (fj + t as f64 * my).round() as i64;
-                (i >= 0 && j >= 0 && i < wi && j < hi)
-                    .then(|| u8::from(self.kept[(j * wi + i) as usize]))
+                let s = samples[(t - first) as usize];
+                (s >= 0).then_some(s as u8)
             };
             let expected = (-sweep).max(0.0) * sx;
             let mut best: Option<(f64, f64)> = None;

@@ -21,6 +21,15 @@ use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::EventSurface;
 use nalgebra::{Isometry3, Vector3, Vector6};
 
+/// Nearest grid index of a sample position, `floor(x + 0.5)`, without the libm call `f64::round` makes on targets
+/// without SSE4.1 (it differs from `round` only at negative halves). Every negative index is out of range, so all
+/// of them map to -1.
+#[inline]
+fn grid_index(x: f64) -> i64 {
+    let v = x + 0.5;
+    if v >= 0.0 { v as i64 } else { -1 }
+}
+
 /// How events become residuals.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -125,6 +134,12 @@ pub struct EventEdges {
     contour_match: Vec<Option<[f64; 2]>>,
     /// Per contour point, the outline step found on its correspondence line (full-image pixels) and its contrast.
     line_match: Vec<Option<([f64; 2], f64)>>,
+    /// Scratch: one correspondence line's occupancy samples (1 event, 0 none, -1 outside the ROI).
+    line_samples: Vec<i8>,
+    /// Scratch: ROI column of each image column of the binning box (-1 outside).
+    column_bins: Vec<i32>,
+    /// Scratch: per bin, occupied bins among itself and its left and right neighbours.
+    row_counts: Vec<u8>,
     /// Contour points' inside and outside probe bins of the shift search (ROI grid).
     probes: Vec<[[i32; 2]; 4]>,
     /// Contour points projected at the association pose, full-image pixels (NaN behind the camera).
@@ -176,50 +191,65 @@ impl EventEdges {
         // At most about four samples per bin: larger ROIs are visited with a stride.
         let step = ((1.0 / sx).min(1.0 / sy) / 2.0).floor().max(1.0) as i64;
         let since = t_us - window_us;
+        // ROI column of every image column of the box (-1 outside), shared by all rows.
+        self.column_bins.clear();
+        self.column_bins.extend((x0..x1.max(x0)).map(|x| {
+            let i = ((x as f64 + 0.5 - roi.x) * sx) as i64;
+            if i >= 0 && i < i64::from(w) {
+                i as i32
+            } else {
+                -1
+            }
+        }));
         let mut y = y0;
         while y < y1 {
             let j = ((y as f64 + 0.5 - roi.y) * sy) as i64;
-            if j >= 0 && j < i64::from(h) {
+            if j >= 0 && j < i64::from(h) && y >= 0 {
                 let row = j as usize * w as usize;
-                let mut x = x0;
-                while x < x1 {
-                    if let Some(t) = surface.last_event_us(x as u32, y as u32)
-                        && t > since
-                        && t <= t_us
-                    {
-                        let i = ((x as f64 + 0.5 - roi.x) * sx) as i64;
-                        if i >= 0 && i < i64::from(w) {
-                            let cell = &mut self.hits[row + i as usize];
-                            *cell = cell.saturating_add(1);
-                        }
+                for x in surface.recent_in_row(
+                    y as u32,
+                    x0 as u32,
+                    x1.max(x0) as u32,
+                    step as usize,
+                    since,
+                    t_us,
+                ) {
+                    let i = self.column_bins[(x as i64 - x0) as usize];
+                    if i >= 0 {
+                        let cell = &mut self.hits[row + i as usize];
+                        *cell = cell.saturating_add(1);
                     }
-                    x += step;
                 }
             }
             y += step;
         }
-        let (wi, hi) = (w as i64, h as i64);
-        for j in 0..hi {
-            for i in 0..wi {
-                let k = (j * wi + i) as usize;
+        // Noise filter: a bin is kept if at least `min_neighbours` bins of its 3x3 neighbourhood (itself
+        // included) hold events; counted separably (row sums of occupancy, then column sums).
+        let (wu, hu) = (w as usize, h as usize);
+        self.row_counts.clear();
+        self.row_counts.resize(n, 0);
+        for j in 0..hu {
+            let occ = &self.hits[j * wu..(j + 1) * wu];
+            let out = &mut self.row_counts[j * wu..(j + 1) * wu];
+            for i in 0..wu {
+                let left = i > 0 && occ[i - 1] > 0;
+                let right = i + 1 < wu && occ[i + 1] > 0;
+                out[i] = u8::from(left) + u8::from(occ[i] > 0) + u8::from(right);
+            }
+        }
+        for j in 0..hu {
+            for i in 0..wu {
+                let k = j * wu + i;
                 if self.hits[k] == 0 {
                     continue;
                 }
-                let mut neighbours = 0u8;
-                for dj in -1..=1 {
-                    for di in -1..=1 {
-                        let (a, b) = (i + di, j + dj);
-                        if a >= 0
-                            && b >= 0
-                            && a < wi
-                            && b < hi
-                            && self.hits[(b * wi + a) as usize] > 0
-                        {
-                            neighbours += 1;
-                        }
-                    }
-                }
-                if neighbours < term.min_neighbours {
+                let above = if j > 0 { self.row_counts[k - wu] } else { 0 };
+                let below = if j + 1 < hu {
+                    self.row_counts[k + wu]
+                } else {
+                    0
+                };
+                if above + self.row_counts[k] + below < term.min_neighbours {
                     continue;
                 }
                 self.kept[k] = true;
@@ -228,6 +258,11 @@ impl EventEdges {
                     self.stats.outside += 1;
                 }
             }
+        }
+        let (wi, hi) = (w as i64, h as i64);
+        if term.kind != EventTermKind::Hinge {
+            // Only the hinge uses candidates.
+            return;
         }
         let stride = self.stats.outside.div_ceil(max_candidates.max(1)).max(1);
         let mut seen = 0usize;
@@ -307,8 +342,8 @@ impl EventEdges {
                     let [mx, my] = cp.normal_2d;
                     // Walk inwards: the first kept bin is where the event cloud's outer boundary lies.
                     for k in 0..=reach {
-                        let i = (fi - k as f64 * mx).round() as i64;
-                        let j = (fj - k as f64 * my).round() as i64;
+                        let i = grid_index(fi - k as f64 * mx);
+                        let j = grid_index(fj - k as f64 * my);
                         if i >= 0 && j >= 0 && i < wi && j < hi && self.kept[(j * wi + i) as usize]
                         {
                             return Some([
@@ -487,4 +522,23 @@ fn normal_offset(
         -(mx * camera.fx * p.x + my * camera.fy * p.y) * iz * iz,
     );
     Some((mx * (e[0] - u) + my * (e[1] - v), grad))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::grid_index;
+    use proptest::prelude::*;
+
+    proptest! {
+        #[test]
+        fn grid_index_is_the_nearest_index_or_negative(x in -1e6f64..1e6) {
+            let nearest = (x + 0.5).floor() as i64;
+            let g = grid_index(x);
+            if nearest >= 0 {
+                prop_assert_eq!(g, nearest);
+            } else {
+                prop_assert!(g < 0);
+            }
+        }
+    }
 }

@@ -185,15 +185,18 @@ impl CpuRenderer {
                 } else if n.dot(ray) > 0.0 {
                     n = -n;
                 }
+                target.depth[idx] = 1.0 / self.vis.inv_z[idx];
+                target.normals[idx] = n.to_array();
+                target.mask[idx] = info.mask;
+                if !scene.shade_intensity {
+                    continue;
+                }
                 let albedo = match &mesh.albedo[mesh.triangle_materials[tri] as usize] {
                     Albedo::Constant(a) => *a,
                     Albedo::Textured(texture) => {
                         texture.sample(mesh.uvs[i0] * b0 + mesh.uvs[i1] * b1 + mesh.uvs[i2] * b2)
                     }
                 };
-                target.depth[idx] = 1.0 / self.vis.inv_z[idx];
-                target.normals[idx] = n.to_array();
-                target.mask[idx] = info.mask;
                 target.intensity[idx] = albedo * (ambient + diffuse * n.dot(light).max(0.0));
             }
         }
