@@ -314,3 +314,90 @@ fn outline_search_finds_a_shift_beyond_the_refinement_range() {
         "({du:.1}, {dv:.1}) px"
     );
 }
+
+/// Refines `start` with the intensity-edge term alone against `surface`'s `I_t` (at 10 ms); returns the final
+/// pose and the residuals of the last round.
+fn refine_intensity(
+    term: &tracker::refine::IntensityTerm,
+    surface: &tracker::recon::EventSurface,
+    renderer: &mut CpuRenderer,
+    id: tracker::render::MeshId,
+    start: Isometry3<f64>,
+    rounds: usize,
+) -> (Isometry3<f64>, usize) {
+    use tracker::refine::IntensityEdges;
+    let cam = common::vga();
+    let center = Vector3::zeros();
+    let bounds = StepBounds {
+        max_rotation: 0.2,
+        max_translation: 0.02,
+    };
+    let (mut pose, mut active) = (start, 0);
+    let mut target = RenderTarget::new();
+    let mut view = ModelView::with_capacity(600, 200);
+    let mut edges = IntensityEdges::default();
+    for _ in 0..rounds {
+        let roi =
+            Roi::around_object(&cam, &(pose * nalgebra::Point3::origin()), 0.17, 1.2, 160).unwrap();
+        let roi_cam = cam.crop(&roi);
+        let scene = [SceneObject {
+            mesh: id,
+            pose,
+            id: 1,
+        }];
+        renderer
+            .render(
+                &Scene::objects(&scene).geometry_only(),
+                &roi_cam,
+                &mut target,
+            )
+            .unwrap();
+        view.extract(&target, &roi_cam, 1, &pose, 600, 200);
+        edges.associate(
+            term,
+            &view,
+            &pose,
+            &cam,
+            surface,
+            10_000,
+            roi.width / f64::from(roi.out_width),
+        );
+        let mut ne = NormalEquations::default();
+        active = edges.accumulate(term, &view, &pose, &center, &cam, &mut ne);
+        for k in 0..6 {
+            ne.h[(k, k)] += 1e3;
+        }
+        let Some(step) = solve_step(&ne, 1e-3, &bounds) else {
+            break;
+        };
+        pose = apply_step(&pose, &center, &step);
+    }
+    (pose, active)
+}
+
+#[test]
+fn intensity_edges_move_a_lagging_silhouette_onto_the_reconstructed_outline() {
+    use tracker::recon::{EventSurface, IntensityFilterConfig};
+    use tracker::refine::IntensityTerm;
+    // I_t is +contrast on the cube's true silhouette and 0 elsewhere: its only edge is the true outline.
+    let (surface, mut renderer, id) = cube_events(&|_, _| false);
+    let term = IntensityTerm {
+        weight: 1.0,
+        max_distance_px: 14.0,
+        ..IntensityTerm::default()
+    };
+    let before = 0.008;
+    let (pose, active) = refine_intensity(&term, &surface, &mut renderer, id, lateral(-before), 6);
+    let after = (pose.translation.vector - truth().translation.vector).norm();
+    assert!(active > 20, "only {active} intensity residuals");
+    assert!(
+        after < 0.25 * before,
+        "translation error {before:.4} m -> {after:.4} m"
+    );
+    // Without any events I_t is flat: no edge, no residual, no motion.
+    let cam = common::vga();
+    let flat = EventSurface::new(cam.width, cam.height, IntensityFilterConfig::default());
+    let (pose, active) = refine_intensity(&term, &flat, &mut renderer, id, lateral(-before), 3);
+    assert_eq!(active, 0);
+    assert!((pose.translation.vector - lateral(-before).translation.vector).norm() < 1e-9);
+}

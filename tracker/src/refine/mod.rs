@@ -8,12 +8,15 @@
 
 mod depth_term;
 mod event_term;
+mod intensity_term;
 mod model_view;
 
 pub use depth_term::{DepthTerm, DepthTermStats};
 pub use event_term::{EventEdges, EventTerm, EventTermKind, EventTermStats};
+pub use intensity_term::{IntensityEdges, IntensityTerm};
 pub use model_view::{ContourPoint, ModelView, SurfacePoint};
 
+use crate::geometry::PinholeCamera;
 use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
 
 /// Accumulated weighted least-squares normal equations `H xi = -g` of one iteration.
@@ -112,6 +115,31 @@ pub fn apply_step(
     let new_center = c.coords + v;
     let translation = new_center - rotation * center_obj;
     Isometry3::from_parts(Translation3::from(translation), rotation)
+}
+
+/// Offset of image point `e` from the projection of camera-frame point `p` along the unit image normal `m`
+/// (full-image pixels, positive outwards), and its gradient with respect to `p` (`-m^T d pi / d P`); `None`
+/// behind the camera.
+#[inline]
+pub(crate) fn normal_offset(
+    camera: &PinholeCamera,
+    p: &nalgebra::Point3<f64>,
+    m: [f64; 2],
+    e: &[f64; 2],
+) -> Option<(f64, Vector3<f64>)> {
+    if p.z <= 0.01 {
+        return None;
+    }
+    let iz = 1.0 / p.z;
+    let u = camera.fx * p.x * iz + camera.cx;
+    let v = camera.fy * p.y * iz + camera.cy;
+    let [mx, my] = m;
+    let grad = -Vector3::new(
+        mx * camera.fx * iz,
+        my * camera.fy * iz,
+        -(mx * camera.fx * p.x + my * camera.fy * p.y) * iz * iz,
+    );
+    Some((mx * (e[0] - u) + my * (e[1] - v), grad))
 }
 
 #[cfg(test)]

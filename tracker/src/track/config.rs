@@ -1,7 +1,7 @@
 //! Tracker parameters and the method presets (`eventtrack6d`, `depth30`, `events-only`).
 
 use crate::recon::IntensityFilterConfig;
-use crate::refine::{DepthTerm, EventTerm};
+use crate::refine::{DepthTerm, EventTerm, IntensityTerm};
 use serde::{Deserialize, Serialize};
 
 /// When the depth modality is used.
@@ -108,6 +108,8 @@ pub struct TrackerConfig {
     pub depth_term: DepthTerm,
     /// Event residual parameters.
     pub event_term: EventTerm,
+    /// Intensity-edge residual parameters (edges of the reconstructed `I_t` against the model outline).
+    pub intensity_term: IntensityTerm,
     /// Quality thresholds.
     pub quality: QualityConfig,
 }
@@ -145,6 +147,7 @@ impl Default for TrackerConfig {
             intensity: IntensityFilterConfig::default(),
             depth_term: DepthTerm::default(),
             event_term: EventTerm::default(),
+            intensity_term: IntensityTerm::default(),
             quality: QualityConfig::default(),
         }
     }

@@ -5,7 +5,8 @@ use super::estimate::TrackingState;
 use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::{CarriedDepth, DepthImage, DepthRig, EventSurface};
 use crate::refine::{
-    DepthTermStats, EventEdges, ModelView, NormalEquations, StepBounds, apply_step, solve_step,
+    DepthTermStats, EventEdges, IntensityEdges, ModelView, NormalEquations, StepBounds, apply_step,
+    solve_step,
 };
 use crate::render::RenderTarget;
 use drivers::recording::DepthFrame;
@@ -42,6 +43,7 @@ pub(crate) struct ObjectTrack {
     carried: CarriedDepth,
     depth_now: DepthImage,
     edges: EventEdges,
+    intensity_edges: IntensityEdges,
 }
 
 /// Per-tick inputs shared by every object.
@@ -94,6 +96,7 @@ impl ObjectTrack {
                 z: Vec::with_capacity(n * n),
             },
             edges: EventEdges::default(),
+            intensity_edges: IntensityEdges::default(),
         }
     }
 
@@ -190,6 +193,8 @@ impl ObjectTrack {
         let depth_term = config.depth_term;
         let event_term = config.event_term;
         let use_events = config.events && !self.view.contour.is_empty();
+        let intensity_term = config.intensity_term;
+        let use_intensity = use_events && intensity_term.weight > 0.0;
         let mut window_s = 0.0;
         if use_events {
             let speed = self.image_speed(inputs.camera).max(1.0);
@@ -289,6 +294,29 @@ impl ObjectTrack {
                     &mut e,
                 );
                 ne.add_scaled(&e, config.event_weight);
+            }
+            if use_intensity {
+                if it % 2 == 0 {
+                    self.intensity_edges.associate(
+                        &intensity_term,
+                        &self.view,
+                        &pose,
+                        inputs.camera,
+                        inputs.surface,
+                        inputs.t_us,
+                        roi.width / f64::from(roi.out_width.max(1)),
+                    );
+                }
+                let mut e = NormalEquations::default();
+                self.intensity_edges.accumulate(
+                    &intensity_term,
+                    &self.view,
+                    &pose,
+                    &self.center_obj,
+                    inputs.camera,
+                    &mut e,
+                );
+                ne.add_scaled(&e, intensity_term.weight);
             }
             // Prior towards the prediction: keeps directions the data cannot see (e.g. rotation about a
             // symmetry axis) where the motion model puts them.

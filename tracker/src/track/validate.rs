@@ -156,6 +156,28 @@ impl TrackerConfig {
         check("depth_term.sigma_z2", d.sigma_z2, non_neg, NON_NEGATIVE)?;
         check("depth_term.occlusion_gap", d.occlusion_gap, pos, POSITIVE)?;
         check("depth_term.max_residual", d.max_residual, pos, POSITIVE)?;
+        let it = &self.intensity_term;
+        check("intensity_term.weight", it.weight, non_neg, NON_NEGATIVE)?;
+        check(
+            "intensity_term.box_px",
+            f64::from(it.box_px),
+            |v| (1.0..=16.0).contains(&v),
+            "must be 1 to 16",
+        )?;
+        check(
+            "intensity_term.min_step",
+            it.min_step,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check("intensity_term.full_step", it.full_step, pos, POSITIVE)?;
+        check(
+            "intensity_term.max_distance_px",
+            it.max_distance_px,
+            |v| (0.0..=100.0).contains(&v),
+            "must be 0 to 100",
+        )?;
+        check("intensity_term.sigma_px", it.sigma_px, pos, POSITIVE)?;
         let e = &self.event_term;
         check(
             "event_term.line_box_bins",

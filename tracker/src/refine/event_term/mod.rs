@@ -16,7 +16,7 @@
 mod lines;
 mod search;
 
-use super::{ModelView, NormalEquations};
+use super::{ModelView, NormalEquations, normal_offset};
 use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::EventSurface;
 use nalgebra::{Isometry3, Vector3, Vector6};
@@ -497,31 +497,6 @@ impl EventEdges {
         }
         Some(supported as f64 / view.contour.len() as f64)
     }
-}
-
-/// Offset of image point `e` from the projection of camera-frame point `p` along the unit image normal `m`
-/// (full-image pixels, positive outwards), and its gradient with respect to `p` (`-m^T d pi / d P`); `None`
-/// behind the camera.
-#[inline]
-fn normal_offset(
-    camera: &PinholeCamera,
-    p: &nalgebra::Point3<f64>,
-    m: [f64; 2],
-    e: &[f64; 2],
-) -> Option<(f64, Vector3<f64>)> {
-    if p.z <= 0.01 {
-        return None;
-    }
-    let iz = 1.0 / p.z;
-    let u = camera.fx * p.x * iz + camera.cx;
-    let v = camera.fy * p.y * iz + camera.cy;
-    let [mx, my] = m;
-    let grad = -Vector3::new(
-        mx * camera.fx * iz,
-        my * camera.fy * iz,
-        -(mx * camera.fx * p.x + my * camera.fy * p.y) * iz * iz,
-    );
-    Some((mx * (e[0] - u) + my * (e[1] - v), grad))
 }
 
 #[cfg(test)]
