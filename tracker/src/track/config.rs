@@ -63,6 +63,9 @@ pub struct TrackerConfig {
     /// event-driven estimate when its fraction of agreeing model points is higher by more than this; negative
     /// disables the check.
     pub depth_fallback_margin: f64,
+    /// Whether the depth-only fallback also starts from the previous depth frame's pose carried on at the velocity
+    /// measured between depth frames (and keeps the better of its two results).
+    pub depth_fallback_extrapolate: bool,
     /// Whether a degraded or lost object searches the event term's whole shift range every tick (to catch up
     /// with an object it fell behind) rather than the range its motion predicts.
     pub search_wide_when_degraded: bool,
@@ -125,6 +128,7 @@ impl Default for TrackerConfig {
             events: true,
             prediction: true,
             depth_fallback_margin: 0.05,
+            depth_fallback_extrapolate: true,
             search_wide_when_degraded: false,
             prediction_gain: 0.5,
             predict_rotation: true,

@@ -344,31 +344,8 @@ impl ObjectTrack {
         if fresh
             && use_events
             && config.depth_fallback_margin >= 0.0
-            && let Some((_, anchor)) = self.anchor
+            && let Some((t_anchor, anchor)) = self.anchor
         {
-            let mut fallback = anchor;
-            let mut fallback_offset = Vector6::zeros();
-            for _ in 0..config.iterations {
-                let mut ne = NormalEquations::default();
-                depth_term.accumulate(
-                    &self.view,
-                    &fallback,
-                    &self.center_obj,
-                    &roi_camera,
-                    &self.depth_now,
-                    &mut ne,
-                );
-                for k in 0..6 {
-                    let w = if k < 3 { prior_t } else { prior_r };
-                    ne.h[(k, k)] += w;
-                    ne.g[k] += w * fallback_offset[k];
-                }
-                let Some(step) = solve_step(&ne, config.damping, &bounds) else {
-                    break;
-                };
-                fallback_offset += step;
-                fallback = apply_step(&fallback, &self.center_obj, &step);
-            }
             let fit = |pose: &Isometry3<f64>, view: &ModelView, depth: &DepthImage| {
                 let mut scratch = NormalEquations::default();
                 let s = depth_term.accumulate(
@@ -381,14 +358,55 @@ impl ObjectTrack {
                 );
                 (s.inliers as f64 / s.points.max(1) as f64, s)
             };
+            // Starts: the previous depth frame's pose and, optionally, that pose carried on at the velocity
+            // measured between depth frames (neither depends on what the events did since).
+            let span = (inputs.t_us - t_anchor).max(0) as f64 * 1e-6;
+            let starts = [
+                Some(anchor),
+                config
+                    .depth_fallback_extrapolate
+                    .then(|| apply_step(&anchor, &self.center_obj, &(self.velocity * span))),
+            ];
+            let mut best: Option<(f64, Isometry3<f64>, DepthTermStats)> = None;
+            for start in starts.into_iter().flatten() {
+                let mut fallback = start;
+                let mut fallback_offset = Vector6::zeros();
+                for _ in 0..config.iterations {
+                    let mut ne = NormalEquations::default();
+                    depth_term.accumulate(
+                        &self.view,
+                        &fallback,
+                        &self.center_obj,
+                        &roi_camera,
+                        &self.depth_now,
+                        &mut ne,
+                    );
+                    for k in 0..6 {
+                        let w = if k < 3 { prior_t } else { prior_r };
+                        ne.h[(k, k)] += w;
+                        ne.g[k] += w * fallback_offset[k];
+                    }
+                    let Some(step) = solve_step(&ne, config.damping, &bounds) else {
+                        break;
+                    };
+                    fallback_offset += step;
+                    fallback = apply_step(&fallback, &self.center_obj, &step);
+                }
+                let (f, stats) = fit(&fallback, &self.view, &self.depth_now);
+                if best.is_none_or(|(b, _, _)| f > b) {
+                    best = Some((f, fallback, stats));
+                }
+            }
             let (main_fit, main_stats) = fit(&pose, &self.view, &self.depth_now);
-            let (fallback_fit, fallback_stats) = fit(&fallback, &self.view, &self.depth_now);
-            if fallback_fit > main_fit + config.depth_fallback_margin {
-                pose = fallback;
-                depth_stats = Some(fallback_stats);
-                self.fallbacks += 1;
-            } else {
-                depth_stats = Some(main_stats);
+            match best {
+                Some((fallback_fit, fallback, fallback_stats))
+                    if fallback_fit > main_fit + config.depth_fallback_margin =>
+                {
+                    pose = fallback;
+                    depth_stats = Some(fallback_stats);
+                    self.fallbacks += 1;
+                }
+                _ => depth_stats = Some(main_stats),
             }
         }
         if fresh {
