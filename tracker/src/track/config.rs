@@ -66,6 +66,8 @@ pub struct TrackerConfig {
     /// Whether the depth-only fallback also starts from the previous depth frame's pose carried on at the velocity
     /// measured between depth frames (and keeps the better of its two results).
     pub depth_fallback_extrapolate: bool,
+    /// Whether the ROI at a depth exposure grows to also cover the extrapolated fallback start.
+    pub roi_widen_at_depth: bool,
     /// Whether a degraded or lost object searches the event term's whole shift range every tick (to catch up
     /// with an object it fell behind) rather than the range its motion predicts.
     pub search_wide_when_degraded: bool,
@@ -129,6 +131,7 @@ impl Default for TrackerConfig {
             prediction: true,
             depth_fallback_margin: 0.05,
             depth_fallback_extrapolate: true,
+            roi_widen_at_depth: false,
             search_wide_when_degraded: false,
             prediction_gain: 0.5,
             predict_rotation: true,

@@ -308,7 +308,7 @@ impl PoseTracker for EventTrack6d {
                 ..inputs
             };
             let roi = if refines {
-                o.update_roi(&self.rig.event_camera, &self.config)
+                o.update_roi(&self.rig.event_camera, &self.config, t_us, depth_now)
             } else {
                 None
             };

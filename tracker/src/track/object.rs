@@ -118,16 +118,39 @@ impl ObjectTrack {
         };
     }
 
-    /// The ROI around the predicted pose, if the object is in front of the camera.
-    pub fn update_roi(&mut self, camera: &PinholeCamera, config: &TrackerConfig) -> Option<Roi> {
-        let c = self.center_at(&self.predicted);
+    /// The ROI around the predicted pose, if the object is in front of the camera. At a depth exposure
+    /// (`depth_due`) with the extrapolated depth fallback on, it is widened to also hold the object where the
+    /// previous depth pose carried on at the measured velocity puts it, so the depth image covers that start too.
+    pub fn update_roi(
+        &mut self,
+        camera: &PinholeCamera,
+        config: &TrackerConfig,
+        t_us: i64,
+        depth_due: bool,
+    ) -> Option<Roi> {
+        let mut c = self.center_at(&self.predicted);
+        let mut scale = config.roi_scale;
+        if depth_due
+            && config.depth_fallback_extrapolate
+            && config.depth_fallback_margin >= 0.0
+            && config.roi_widen_at_depth
+            && let Some((t_anchor, anchor)) = self.anchor
+        {
+            let span = (t_us - t_anchor).max(0) as f64 * 1e-6;
+            let start = apply_step(&anchor, &self.center_obj, &(self.velocity * span));
+            let other = self.center_at(&start);
+            let gap = (other - c).norm();
+            if gap.is_finite() && gap > 0.1 * self.diameter {
+                c = Point3::from((c.coords + other.coords) * 0.5);
+                scale += gap / self.diameter;
+            }
+        }
         // Behind the camera: no ROI (checked here so the lost path does not build an error message per tick).
         if !(c.z > 1e-3 && c.coords.iter().all(|v| v.is_finite())) {
             self.roi = None;
             return None;
         }
-        self.roi =
-            Roi::around_object(camera, &c, self.diameter, config.roi_scale, config.roi_size).ok();
+        self.roi = Roi::around_object(camera, &c, self.diameter, scale, config.roi_size).ok();
         self.roi
     }
 
@@ -525,4 +548,43 @@ fn normalise(pose: Isometry3<f64>) -> Isometry3<f64> {
         Translation3::from(pose.translation.vector),
         UnitQuaternion::new_normalize(*pose.rotation.quaternion()),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn contains(roi: &Roi, camera: &PinholeCamera, p: &Point3<f64>, margin_px: f64) -> bool {
+        let uv = camera.project(p).expect("in front");
+        uv.x >= roi.x + margin_px
+            && uv.y >= roi.y + margin_px
+            && uv.x <= roi.x + roi.width - margin_px
+            && uv.y <= roi.y + roi.height - margin_px
+    }
+
+    #[test]
+    fn roi_at_a_depth_exposure_widens_to_the_extrapolated_start_only_when_asked() {
+        let camera = PinholeCamera::new(600.0, 600.0, 639.5, 359.5, 1280, 720).unwrap();
+        let mut config = TrackerConfig::default();
+        let at = |x: f64| Isometry3::translation(x, 0.0, 0.6);
+        let half = Vector3::new(0.05, 0.05, 0.05);
+        let mut track = ObjectTrack::new(1, 0.1, -half, half, at(0.0), 0, &config);
+        // The previous depth pose 33 ms ago at x = 0, moving at 3 m/s along x: the extrapolated start is
+        // 10 cm (one diameter) away from a prediction that stayed at x = 0.
+        track.anchor = Some((0, at(0.0)));
+        track.velocity = Vector6::new(3.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        track.predicted = at(0.0);
+        let t = 33_333;
+        let extrapolated = Point3::new(0.1, 0.0, 0.6);
+        let plain = track.update_roi(&camera, &config, t, true).unwrap();
+        assert!(!contains(&plain, &camera, &extrapolated, 0.0));
+        config.roi_widen_at_depth = true;
+        let between = track.update_roi(&camera, &config, t, false).unwrap();
+        assert_eq!(between, plain, "only depth exposures widen");
+        let wide = track.update_roi(&camera, &config, t, true).unwrap();
+        // Half a diameter (50 px at 0.6 m) of the object on either side fits in the ROI.
+        for p in [Point3::new(0.0, 0.0, 0.6), extrapolated] {
+            assert!(contains(&wide, &camera, &p, 40.0), "{wide:?} misses {p:?}");
+        }
+    }
 }
