@@ -401,3 +401,87 @@ fn intensity_edges_move_a_lagging_silhouette_onto_the_reconstructed_outline() {
     assert_eq!(active, 0);
     assert!((pose.translation.vector - lateral(-before).translation.vector).norm() < 1e-9);
 }
+
+#[test]
+fn contrast_maximisation_recovers_the_velocity_of_a_moving_outline() {
+    use drivers::event::CdEvent;
+    use tracker::recon::{EventSurface, IntensityFilterConfig};
+    use tracker::refine::{EventEdges, EventTerm, EventTermKind};
+    let cam = common::vga();
+    let mut renderer = CpuRenderer::new();
+    let id = renderer.add_mesh(Arc::new(common::cube(0.1))).unwrap();
+    // The cube moves at 1 m/s along x; its outline fires events every 0.5 ms over the last 4 ms before 10 ms.
+    let speed = 1.0;
+    let mut surface = EventSurface::new(cam.width, cam.height, IntensityFilterConfig::default());
+    let mut full = RenderTarget::new();
+    for k in (0..9).rev() {
+        let age_s = 0.0005 * f64::from(k);
+        let t_us = 10_000 - (age_s * 1e6) as i64;
+        let scene = [SceneObject {
+            mesh: id,
+            pose: lateral(-speed * age_s),
+            id: 1,
+        }];
+        renderer
+            .render(&Scene::objects(&scene).geometry_only(), &cam, &mut full)
+            .unwrap();
+        let inside = |x: u32, y: u32| full.mask()[(y * cam.width + x) as usize] == 1;
+        let events: Vec<CdEvent> = (1..cam.height - 1)
+            .flat_map(|y| (1..cam.width - 1).map(move |x| (x, y)))
+            .filter(|&(x, y)| inside(x, y) && !(inside(x - 1, y) && inside(x + 1, y)))
+            .map(|(x, y)| CdEvent {
+                t_us,
+                x: x as u16,
+                y: y as u16,
+                polarity: true,
+            })
+            .collect();
+        surface.integrate(&events);
+    }
+    let term = EventTerm {
+        kind: EventTermKind::ContrastMax,
+        min_neighbours: 1,
+        ..EventTerm::default()
+    };
+    let pose = truth();
+    let roi =
+        Roi::around_object(&cam, &(pose * nalgebra::Point3::origin()), 0.17, 1.2, 160).unwrap();
+    let roi_cam = cam.crop(&roi);
+    let mut target = RenderTarget::new();
+    let scene = [SceneObject {
+        mesh: id,
+        pose,
+        id: 1,
+    }];
+    renderer
+        .render(
+            &Scene::objects(&scene).geometry_only(),
+            &roi_cam,
+            &mut target,
+        )
+        .unwrap();
+    let mut edges = EventEdges::default();
+    edges.collect(&term, &surface, &roi, target.mask(), 1, 10_000, 4_500, 400);
+    let center = pose * nalgebra::Point3::origin();
+    edges.lift_events(
+        &surface,
+        &cam,
+        target.depth(),
+        target.mask(),
+        1,
+        10_000,
+        4_500,
+        center.z,
+        4_000,
+    );
+    assert!(
+        edges.lifted_events() > 100,
+        "{} events",
+        edges.lifted_events()
+    );
+    let found = edges.maximise_contrast(&cam, &center, &nalgebra::Vector6::zeros(), 0.5, 0.0, 6);
+    assert!(
+        (found[0] - speed).abs() < 0.25 && found[1].abs() < 0.25,
+        "velocity {found:?}, expected ({speed}, 0, 0)"
+    );
+}

@@ -5,8 +5,8 @@ use super::estimate::TrackingState;
 use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::{CarriedDepth, DepthImage, DepthRig, EventSurface};
 use crate::refine::{
-    DepthTermStats, EventEdges, IntensityEdges, ModelView, NormalEquations, StepBounds, apply_step,
-    solve_step,
+    DepthTermStats, EventEdges, EventTermKind, IntensityEdges, ModelView, NormalEquations,
+    StepBounds, apply_step, solve_step,
 };
 use crate::render::RenderTarget;
 use drivers::recording::DepthFrame;
@@ -218,6 +218,9 @@ impl ObjectTrack {
         let use_events = config.events && !self.view.contour.is_empty();
         let intensity_term = config.intensity_term;
         let use_intensity = use_events && intensity_term.weight > 0.0;
+        let contrast_max = use_events && event_term.kind == EventTermKind::ContrastMax;
+        let use_event_residuals = use_events && !contrast_max;
+        let mut contrast_velocity = None;
         let mut window_s = 0.0;
         if use_events {
             let speed = self.image_speed(inputs.camera).max(1.0);
@@ -234,12 +237,41 @@ impl ObjectTrack {
                 window,
                 config.max_event_points,
             );
+            if contrast_max {
+                let c = self.center_at(&predicted);
+                self.edges.lift_events(
+                    inputs.surface,
+                    inputs.camera,
+                    self.target.depth(),
+                    self.target.mask(),
+                    self.label,
+                    inputs.t_us,
+                    window,
+                    c.z,
+                    config.max_event_points * 8,
+                );
+                contrast_velocity = Some(self.edges.maximise_contrast(
+                    inputs.camera,
+                    &c,
+                    &self.velocity,
+                    event_term.contrast_step_translation,
+                    event_term.contrast_step_rotation,
+                    event_term.contrast_rounds,
+                ));
+            }
         }
         let bounds = StepBounds {
             max_rotation: config.max_step_rotation_deg.to_radians(),
             max_translation: config.max_step_translation_diameters * self.diameter,
         };
-        let mut pose = predicted;
+        let mut pose = match contrast_velocity {
+            // The motion contrast maximisation found, from the previous estimate.
+            Some(xi) => {
+                let span = (inputs.t_us - self.t_us).max(0) as f64 * 1e-6;
+                apply_step(&self.pose, &self.center_obj, &(xi * span))
+            }
+            None => predicted,
+        };
         // Until two depth frames have measured the motion, and while the estimate is not trusted, the whole
         // range is searched.
         let search_range = if self.depth_frames_used < 2
@@ -252,7 +284,7 @@ impl ObjectTrack {
                 .max(event_term.search_min_px)
                 .min(event_term.search_px)
         };
-        if use_events
+        if use_event_residuals
             && let Some([du, dv]) = self.edges.search_shift(
                 &event_term,
                 &self.view,
@@ -295,7 +327,7 @@ impl ObjectTrack {
                 depth_stats = Some(s);
                 ne.add_scaled(&d, depth_weight);
             }
-            if use_events {
+            if use_event_residuals {
                 if it % 2 == 0 {
                     self.edges.associate(
                         &event_term,

@@ -156,6 +156,24 @@ impl TrackerConfig {
         check("depth_term.sigma_z2", d.sigma_z2, non_neg, NON_NEGATIVE)?;
         check("depth_term.occlusion_gap", d.occlusion_gap, pos, POSITIVE)?;
         check("depth_term.max_residual", d.max_residual, pos, POSITIVE)?;
+        check(
+            "event_term.contrast_step_translation",
+            self.event_term.contrast_step_translation,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "event_term.contrast_step_rotation",
+            self.event_term.contrast_step_rotation,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "event_term.contrast_rounds",
+            f64::from(self.event_term.contrast_rounds),
+            |v| v <= 16.0,
+            "must be at most 16",
+        )?;
         let it = &self.intensity_term;
         check("intensity_term.weight", it.weight, non_neg, NON_NEGATIVE)?;
         check(

@@ -12,7 +12,12 @@
 //! Alternative ([`EventTermKind::Hinge`]): events outside the silhouette contribute the hinge residual
 //! `max(0, m . (e - pi(P)))` and contour points with no event under them are pulled in to the event cloud. It is
 //! biased by events next to the object (see BENCHMARKS.md, "How the event term was chosen").
+//!
+//! Alternative ([`EventTermKind::ContrastMax`]): no residuals; the object velocity that sharpens the window's
+//! events (lifted to 3D at the rendered depth) moves the previous estimate to the refinement's start. It measures
+//! motion only and scored far below the lines on the dev suite.
 
+mod contrast;
 mod lines;
 mod search;
 
@@ -42,6 +47,10 @@ pub enum EventTermKind {
     /// Silhouette hinge: events outside the silhouette push it outwards, contour points with no event under
     /// them are pulled in to the event cloud (biased by events next to the object, e.g. a holding hand).
     Hinge,
+    /// Contrast maximisation with rendered depth: the window's events, lifted to 3D at the rendered depth, are
+    /// warped to the tick time by a candidate velocity; the sharpest image of warped events gives the motion,
+    /// which moves the previous estimate to the refinement's start (no event residuals in the refinement).
+    ContrastMax,
 }
 
 /// Parameters of the event term.
@@ -84,6 +93,12 @@ pub struct EventTerm {
     /// A searched shift replaces the prediction only if its score beats the unshifted outline's by this
     /// fraction of the contour points.
     pub search_min_gain: f64,
+    /// Contrast maximisation: first step of the pattern search over the centre's velocity, m/s.
+    pub contrast_step_translation: f64,
+    /// Contrast maximisation: first step of the pattern search over the angular velocity, rad/s.
+    pub contrast_step_rotation: f64,
+    /// Contrast maximisation: halvings of the pattern search's steps.
+    pub contrast_rounds: u32,
 }
 
 impl Default for EventTerm {
@@ -104,6 +119,9 @@ impl Default for EventTerm {
             search_min_px: 8.0,
             search_speed_factor: 2.0,
             search_min_gain: 0.1,
+            contrast_step_translation: 0.25,
+            contrast_step_rotation: 3.0,
+            contrast_rounds: 5,
         }
     }
 }
@@ -140,6 +158,10 @@ pub struct EventEdges {
     column_bins: Vec<i32>,
     /// Scratch: per bin, occupied bins among itself and its left and right neighbours.
     row_counts: Vec<u8>,
+    /// Contrast maximisation: the window's events lifted to 3D.
+    lifted: Vec<contrast::LiftedEvent>,
+    /// Contrast maximisation scratch: the image of warped events on the ROI grid.
+    warped: Vec<f32>,
     /// Contour points' inside and outside probe bins of the shift search (ROI grid).
     probes: Vec<[[i32; 2]; 4]>,
     /// Contour points projected at the association pose, full-image pixels (NaN behind the camera).
@@ -325,6 +347,10 @@ impl EventEdges {
                 .push((cp.normal_2d[0] * du + cp.normal_2d[1] * dv) * window_s);
         }
         self.line_match.clear();
+        if term.kind == EventTermKind::ContrastMax {
+            // No residuals: the motion comes from `maximise_contrast`.
+            return;
+        }
         if term.kind == EventTermKind::Lines {
             self.find_steps(term, view, pose, camera);
             return;
@@ -398,8 +424,15 @@ impl EventEdges {
         camera: &PinholeCamera,
         ne: &mut NormalEquations,
     ) -> usize {
-        if term.kind == EventTermKind::Lines {
-            return self.accumulate_lines(term, view, pose, center_obj, camera, ne);
+        match term.kind {
+            EventTermKind::Lines => {
+                return self.accumulate_lines(term, view, pose, center_obj, camera, ne);
+            }
+            EventTermKind::ContrastMax => {
+                self.stats.active = 0;
+                return 0;
+            }
+            EventTermKind::Hinge => {}
         }
         let c = pose * nalgebra::Point3::from(*center_obj);
         let mut active = 0;
