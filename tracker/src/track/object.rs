@@ -375,11 +375,7 @@ impl ObjectTrack {
             }
             // Prior towards the prediction: keeps directions the data cannot see (e.g. rotation about a
             // symmetry axis) where the motion model puts them.
-            for k in 0..6 {
-                let w = if k < 3 { prior_t } else { prior_r };
-                ne.h[(k, k)] += w;
-                ne.g[k] += w * offset[k];
-            }
+            add_prior(&mut ne, &offset, prior_t, prior_r);
             let Some(step) = solve_step(&ne, config.damping, &bounds) else {
                 break;
             };
@@ -436,11 +432,7 @@ impl ObjectTrack {
                         &self.depth_now,
                         &mut ne,
                     );
-                    for k in 0..6 {
-                        let w = if k < 3 { prior_t } else { prior_r };
-                        ne.h[(k, k)] += w;
-                        ne.g[k] += w * fallback_offset[k];
-                    }
+                    add_prior(&mut ne, &fallback_offset, prior_t, prior_r);
                     let Some(step) = solve_step(&ne, config.damping, &bounds) else {
                         break;
                     };
@@ -571,6 +563,16 @@ impl ObjectTrack {
         self.previous = Some((self.t_us, self.pose));
         self.pose = normalise(pose);
         self.t_us = inputs.t_us;
+    }
+}
+
+/// Adds the prior towards the refinement's start: `offset` is the increment accumulated so far, `prior_t` and
+/// `prior_r` the inverse variances of translation (1/m^2) and rotation (1/rad^2).
+fn add_prior(ne: &mut NormalEquations, offset: &Vector6<f64>, prior_t: f64, prior_r: f64) {
+    for k in 0..6 {
+        let w = if k < 3 { prior_t } else { prior_r };
+        ne.h[(k, k)] += w;
+        ne.g[k] += w * offset[k];
     }
 }
 
