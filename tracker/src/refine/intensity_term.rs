@@ -7,7 +7,7 @@
 //! term, whose window leaves one). Along each contour point's image normal the strongest step of `I_t` within
 //! reach is the observed outline; its offset from the projected contour is the residual.
 
-use super::{ModelView, NormalEquations, normal_offset};
+use super::{ContourResiduals, ModelView, NormalEquations};
 use crate::geometry::PinholeCamera;
 use crate::recon::EventSurface;
 use nalgebra::{Isometry3, Vector3};
@@ -131,9 +131,12 @@ impl IntensityEdges {
         camera: &PinholeCamera,
         ne: &mut NormalEquations,
     ) -> usize {
-        let c = pose * nalgebra::Point3::from(*center_obj);
-        let cutoff = 3.0 * term.sigma_px;
-        let s2 = term.sigma_px * term.sigma_px;
+        let residuals = ContourResiduals {
+            camera,
+            center: pose * nalgebra::Point3::from(*center_obj),
+            sigma_px: term.sigma_px,
+            max_px: term.max_distance_px + 1.0,
+        };
         let full = term.full_step.max(f64::MIN_POSITIVE);
         let mut active = 0;
         for (cp, m) in view.contour.iter().zip(&self.matches) {
@@ -141,15 +144,9 @@ impl IntensityEdges {
                 continue;
             };
             let p = pose * cp.position;
-            let Some((r, grad)) = normal_offset(camera, &p, cp.normal_2d, e) else {
-                continue;
-            };
-            if r.abs() > term.max_distance_px + 1.0 {
-                continue;
+            if residuals.add(ne, &p, cp.normal_2d, e, 0.0, (step / full).min(1.0)) {
+                active += 1;
             }
-            active += 1;
-            let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
-            ne.add_point(&grad, &(p - c), r, (step / full).min(1.0) * robust / s2);
         }
         self.active = active;
         active

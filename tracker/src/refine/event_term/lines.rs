@@ -1,9 +1,9 @@
 //! Correspondence lines of [`EventEdges`]: the events-to-no-events step along each contour normal and its
 //! residuals.
 
-use super::{EventEdges, EventTerm, grid_index, normal_offset};
+use super::{EventEdges, EventTerm, grid_index};
 use crate::geometry::PinholeCamera;
-use crate::refine::{ModelView, NormalEquations};
+use crate::refine::{ContourResiduals, ModelView, NormalEquations};
 use nalgebra::{Isometry3, Vector3};
 
 impl EventEdges {
@@ -130,25 +130,28 @@ impl EventEdges {
         camera: &PinholeCamera,
         ne: &mut NormalEquations,
     ) -> usize {
-        let c = pose * nalgebra::Point3::from(*center_obj);
-        let cutoff = 3.0 * term.sigma_px;
-        let s2 = term.sigma_px * term.sigma_px;
+        let residuals = ContourResiduals {
+            camera,
+            center: pose * nalgebra::Point3::from(*center_obj),
+            sigma_px: term.sigma_px,
+            max_px: term.max_distance_px,
+        };
         let mut active = 0;
         for ((cp, m), &sweep) in view.contour.iter().zip(&self.line_match).zip(&self.sweep) {
             let Some((e, contrast)) = m else {
                 continue;
             };
             let p = pose * cp.position;
-            let Some((offset, grad)) = normal_offset(camera, &p, cp.normal_2d, e) else {
-                continue;
-            };
-            let r = offset - (-sweep).max(0.0);
-            if r.abs() > term.max_distance_px {
-                continue;
+            if residuals.add(
+                ne,
+                &p,
+                cp.normal_2d,
+                e,
+                (-sweep).max(0.0),
+                contrast.min(1.0),
+            ) {
+                active += 1;
             }
-            active += 1;
-            let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
-            ne.add_point(&grad, &(p - c), r, contrast.min(1.0) * robust / s2);
         }
         self.stats.active = active;
         active
