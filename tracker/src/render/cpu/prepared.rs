@@ -93,16 +93,18 @@ pub(super) struct PreparedMesh {
 }
 
 /// Decides whether back faces can be culled: only for closed, consistently oriented surfaces (every edge, after
-/// welding identical positions, used exactly once in each direction). Returns the sign of screen-space area to cull
+/// welding positions within a micrometre, used exactly once in each direction; exporters and lathes often leave
+/// seams whose two copies differ in the last bits). Returns the sign of screen-space area to cull
 /// (see [`PreparedMesh::cull`]); outward winding (positive enclosed volume) culls positive area.
 pub(in crate::render) fn back_face_cull_sign(positions: &[Vec3A], triangles: &[[u32; 3]]) -> i8 {
     use std::collections::HashMap;
-    let mut weld: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
+    let mut weld: HashMap<[i64; 3], u32> = HashMap::with_capacity(positions.len());
     let ids: Vec<u32> = positions
         .iter()
         .map(|p| {
             let next = weld.len() as u32;
-            *weld.entry(p.to_array().map(f32::to_bits)).or_insert(next)
+            let key = p.to_array().map(|v| (f64::from(v) * 1e6).round() as i64);
+            *weld.entry(key).or_insert(next)
         })
         .collect();
     let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(triangles.len() * 2);
@@ -207,5 +209,10 @@ mod tests {
         p2.push(Vec3A::Z);
         let t2 = vec![[0, 2, 1], [0, 1, 3], [0, 4, 2], [1, 2, 4]];
         assert_eq!(back_face_cull_sign(&p2, &t2), 1);
+        // ... and so are copies a few nanometres apart (a lathe's seam at 2 pi), but not a millimetre apart.
+        p2[4] = Vec3A::new(6e-9, -4e-9, 1.0);
+        assert_eq!(back_face_cull_sign(&p2, &t2), 1);
+        p2[4] = Vec3A::new(1e-3, 0.0, 1.0);
+        assert_eq!(back_face_cull_sign(&p2, &t2), 0);
     }
 }
