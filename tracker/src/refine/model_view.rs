@@ -33,6 +33,8 @@ pub struct ModelView {
     pub contour: Vec<ContourPoint>,
     /// Pixels of the object in the render (after occlusion by other objects).
     pub visible_pixels: usize,
+    /// Scratch: indices of the render's silhouette pixels, in raster order.
+    silhouette: Vec<u32>,
 }
 
 impl ModelView {
@@ -42,6 +44,7 @@ impl ModelView {
             surface: Vec::with_capacity(surface),
             contour: Vec::with_capacity(contour),
             visible_pixels: 0,
+            silhouette: Vec::new(),
         }
     }
 
@@ -63,8 +66,10 @@ impl ModelView {
         let depth = target.depth();
         let normals = target.normals();
         let inv = pose.inverse();
+        // Sized once for the largest render, so steady-state ticks do not allocate.
+        self.silhouette.clear();
+        self.silhouette.reserve(w * h);
         let mut visible = 0usize;
-        let mut boundary = 0usize;
         for v in 0..h {
             for u in 0..w {
                 let i = v * w + u;
@@ -73,7 +78,7 @@ impl ModelView {
                 }
                 visible += 1;
                 if is_silhouette(mask, depth, w, h, u, v, id) {
-                    boundary += 1;
+                    self.silhouette.push(i as u32);
                 }
             }
         }
@@ -81,39 +86,43 @@ impl ModelView {
         if visible == 0 {
             return;
         }
+        let unproject = |i: usize| {
+            let (u, v) = (i % w, i / w);
+            camera.unproject(&Point2::new(u as f64, v as f64), f64::from(depth[i]))
+        };
+        // Surface samples on a grid whose pitch keeps them under `max_surface`.
         let stride = ((visible as f64 / max_surface as f64).sqrt().ceil() as usize).max(1);
-        let contour_step = boundary.div_ceil(max_contour).max(1);
-        let mut boundary_seen = 0usize;
-        for v in 0..h {
-            for u in 0..w {
+        'rows: for v in (0..h).step_by(stride) {
+            for u in (0..w).step_by(stride) {
+                if self.surface.len() >= max_surface {
+                    break 'rows;
+                }
                 let i = v * w + u;
                 if mask[i] != id {
                     continue;
                 }
-                let z = f64::from(depth[i]);
-                let p_cam = camera.unproject(&Point2::new(u as f64, v as f64), z);
-                if u % stride == 0 && v % stride == 0 && self.surface.len() < max_surface {
-                    let n = normals[i];
-                    let n_cam = Vector3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]));
-                    if n_cam.norm_squared() > 0.5 {
-                        self.surface.push(SurfacePoint {
-                            position: inv * p_cam,
-                            normal: inv.rotation * n_cam,
-                        });
-                    }
+                let n = normals[i];
+                let n_cam = Vector3::new(f64::from(n[0]), f64::from(n[1]), f64::from(n[2]));
+                if n_cam.norm_squared() > 0.5 {
+                    self.surface.push(SurfacePoint {
+                        position: inv * unproject(i),
+                        normal: inv.rotation * n_cam,
+                    });
                 }
-                if is_silhouette(mask, depth, w, h, u, v, id) {
-                    if boundary_seen.is_multiple_of(contour_step)
-                        && self.contour.len() < max_contour
-                        && let Some(n2) = outward_normal(mask, w, h, u, v, id)
-                    {
-                        self.contour.push(ContourPoint {
-                            position: inv * p_cam,
-                            normal_2d: n2,
-                        });
-                    }
-                    boundary_seen += 1;
-                }
+            }
+        }
+        // Every `contour_step`-th silhouette pixel, in raster order.
+        let contour_step = self.silhouette.len().div_ceil(max_contour).max(1);
+        for &i in self.silhouette.iter().step_by(contour_step) {
+            if self.contour.len() >= max_contour {
+                break;
+            }
+            let i = i as usize;
+            if let Some(n2) = outward_normal(mask, w, h, i % w, i / w, id) {
+                self.contour.push(ContourPoint {
+                    position: inv * unproject(i),
+                    normal_2d: n2,
+                });
             }
         }
     }

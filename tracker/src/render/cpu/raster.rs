@@ -24,9 +24,10 @@ pub(super) struct VisBuffer {
     pub(super) inv_z: Vec<f32>,
     /// Instance index, or [`NO_INSTANCE`].
     pub(super) instance: Vec<u16>,
-    /// Triangle index within the instance's mesh.
+    /// Triangle index within the instance's mesh (meaningful only where `instance` is set).
     pub(super) triangle: Vec<u32>,
-    /// Perspective-correct barycentric coordinates `(b1, b2)` of the original triangle (`b0 = 1 - b1 - b2`).
+    /// Perspective-correct barycentric coordinates `(b1, b2)` of the original triangle (`b0 = 1 - b1 - b2`;
+    /// meaningful only where `instance` is set).
     pub(super) bary: Vec<[f32; 2]>,
 }
 
@@ -40,9 +41,8 @@ impl VisBuffer {
         self.inv_z.resize(n, 0.0);
         self.instance.clear();
         self.instance.resize(n, NO_INSTANCE);
-        self.triangle.clear();
+        // Written together with `instance` and read only where it is set: resized, not cleared.
         self.triangle.resize(n, 0);
-        self.bary.clear();
         self.bary.resize(n, [0.0; 2]);
     }
 }
