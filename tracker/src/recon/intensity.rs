@@ -27,8 +27,16 @@ impl Default for IntensityFilterConfig {
     }
 }
 
-/// Sentinel "no event yet" timestamp.
-const NEVER: i64 = i64::MIN / 4;
+/// Sentinel "no event yet" in the stored offsets. Decoded, it lies about 36 minutes before the base: older than
+/// any window and fully decayed, so it needs no special case except where "never" must be reported.
+const NEVER: i32 = i32::MIN;
+
+/// Offset of the first event from the base, microseconds: events up to this much older than the first one are
+/// stored exactly (about 9 minutes).
+const BASE_MARGIN_US: i64 = 1 << 29;
+
+/// Offsets at or past this move the base forward (about 2 minutes of headroom before the i32 range ends).
+const REBASE_AT_US: i64 = i32::MAX as i64 - (1 << 27);
 
 /// The full-sensor event state: log intensity and latest event time per pixel.
 #[derive(Debug, Clone)]
@@ -37,7 +45,13 @@ pub struct EventSurface {
     height: u32,
     config: IntensityFilterConfig,
     log_intensity: Vec<f32>,
-    last_us: Vec<i64>,
+    /// Latest event time per pixel as an offset from `base_us`, microseconds ([`NEVER`] if none): half the
+    /// memory of absolute times, which the per-tick event binning reads for a whole ROI.
+    last_us: Vec<i32>,
+    /// Time the offsets count from, microseconds; `None` before the first event.
+    base_us: Option<i64>,
+    /// Times the base moved forward.
+    rebases: u64,
     events: u64,
     out_of_bounds: u64,
 }
@@ -52,6 +66,8 @@ impl EventSurface {
             config,
             log_intensity: vec![0.0; n],
             last_us: vec![NEVER; n],
+            base_us: None,
+            rebases: 0,
             events: 0,
             out_of_bounds: 0,
         }
@@ -74,6 +90,12 @@ impl EventSurface {
         self.out_of_bounds
     }
 
+    /// Times the stored offsets were moved to a later base (once every ~33 minutes of stream time; each is one
+    /// pass over the sensor's pixels).
+    pub fn rebases(&self) -> u64 {
+        self.rebases
+    }
+
     /// Integrates events (time order per pixel is assumed; the stream is time-ordered).
     pub fn integrate(&mut self, events: &[CdEvent]) {
         let alpha = self.config.cutoff_hz * 1e-6;
@@ -84,14 +106,43 @@ impl EventSurface {
                 self.out_of_bounds += 1;
                 continue;
             }
+            let base = *self.base_us.get_or_insert(e.t_us - BASE_MARGIN_US);
+            let mut offset = e.t_us - base;
+            if offset >= REBASE_AT_US {
+                self.rebase(e.t_us - BASE_MARGIN_US);
+                offset = BASE_MARGIN_US;
+            }
+            let base = self.base_us.unwrap_or(0);
             let i = e.y as usize * w + e.x as usize;
-            let dt = (e.t_us - self.last_us[i]).max(0) as f32;
+            let dt = (e.t_us - (base + i64::from(self.last_us[i]))).max(0) as f32;
             let decay = decay(alpha * dt);
             let step = if e.polarity { c } else { -c };
             self.log_intensity[i] = self.log_intensity[i] * decay + step;
-            self.last_us[i] = e.t_us;
+            // An event far older than the first one (not time-ordered) is kept as the oldest storable time.
+            self.last_us[i] = offset.max(i64::from(NEVER) + 1) as i32;
         }
         self.events += events.len() as u64;
+    }
+
+    /// Moves the base to `base_us`: offsets are shifted, and times older than the new range become the oldest
+    /// storable time (long past any window and fully decayed).
+    fn rebase(&mut self, base_us: i64) {
+        let shift = base_us - self.base_us.unwrap_or(base_us);
+        for v in &mut self.last_us {
+            if *v != NEVER {
+                *v = (i64::from(*v) - shift).max(i64::from(NEVER) + 1) as i32;
+            }
+        }
+        self.base_us = Some(base_us);
+        self.rebases += 1;
+    }
+
+    /// `t_us` as a stored offset, saturated to the storable range (so comparisons keep their sense).
+    #[inline]
+    fn offset_of(&self, t_us: i64) -> i32 {
+        let base = self.base_us.unwrap_or(0);
+        t_us.saturating_sub(base)
+            .clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
     }
 
     /// Time of the latest event at pixel `(x, y)`, microseconds; `None` if the pixel never fired or is outside.
@@ -101,7 +152,7 @@ impl EventSurface {
             return None;
         }
         let t = self.last_us[y as usize * self.width as usize + x as usize];
-        (t != NEVER).then_some(t)
+        (t != NEVER).then(|| self.base_us.unwrap_or(0) + i64::from(t))
     }
 
     /// Columns `x0, x0 + step, ...` below `x1` of row `y` whose latest event lies in `(since_us, until_us]`
@@ -116,7 +167,8 @@ impl EventSurface {
         until_us: i64,
     ) -> impl Iterator<Item = u32> + '_ {
         let w = self.width as usize;
-        let row: &[i64] = if y < self.height {
+        let (since, until) = (self.offset_of(since_us), self.offset_of(until_us));
+        let row: &[i32] = if y < self.height {
             &self.last_us[y as usize * w..(y as usize + 1) * w]
         } else {
             &[]
@@ -127,7 +179,7 @@ impl EventSurface {
             .iter()
             .enumerate()
             .step_by(step.max(1))
-            .filter(move |&(_, &t)| t != NEVER && t > since_us && t <= until_us)
+            .filter(move |&(_, &t)| t != NEVER && t > since && t <= until)
             .map(move |(i, _)| (x0 + i) as u32)
     }
 
@@ -138,7 +190,8 @@ impl EventSurface {
             return 0.0;
         }
         let i = y as usize * self.width as usize + x as usize;
-        let dt = (t_us - self.last_us[i]).max(0) as f32;
+        let last = self.base_us.unwrap_or(0) + i64::from(self.last_us[i]);
+        let dt = (t_us - last).max(0) as f32;
         self.log_intensity[i] * decay(self.config.cutoff_hz * 1e-6 * dt)
     }
 }
@@ -188,6 +241,32 @@ mod tests {
         // After 0.5 s at 2 /s: exp(-1).
         let v = s.log_intensity_at(0, 0, 500_000);
         assert!((v - (-1.0f32).exp()).abs() < 1e-4, "{v}");
+    }
+
+    #[test]
+    fn times_survive_rebasing_and_windows_keep_their_sense() {
+        let mut s = EventSurface::new(3, 1, IntensityFilterConfig::default());
+        let t0 = 1_000_000_000_i64;
+        s.integrate(&[ev(t0, 0, 0, true)]);
+        // An hour later (past the i32 range of the first base): the base moves, times stay exact.
+        let t1 = t0 + 3_600_000_000;
+        s.integrate(&[ev(t1, 1, 0, true), ev(t1 + 5, 2, 0, false)]);
+        assert_eq!(s.rebases(), 1);
+        assert_eq!(s.last_event_us(1, 0), Some(t1));
+        assert_eq!(s.last_event_us(2, 0), Some(t1 + 5));
+        // The hour-old event is older than the new range: stored as the oldest time, still "an event".
+        let old = s.last_event_us(0, 0).expect("kept");
+        assert!(old < t1 - 1_800_000_000, "{old}");
+        let recent: Vec<u32> = s.recent_in_row(0, 0, 3, 1, t1 - 10, t1 + 10).collect();
+        assert_eq!(recent, vec![1, 2]);
+        let only_first: Vec<u32> = s.recent_in_row(0, 0, 3, 1, t1 - 10, t1).collect();
+        assert_eq!(only_first, vec![1]);
+        // Windows reaching far outside the stored range saturate instead of wrapping.
+        let all: Vec<u32> = s
+            .recent_in_row(0, 0, 3, 1, i64::MIN / 2, i64::MAX / 2)
+            .collect();
+        assert_eq!(all, vec![0, 1, 2]);
+        assert!((s.log_intensity_at(1, 0, t1) - 0.25).abs() < 1e-6);
     }
 
     #[test]
