@@ -1,5 +1,6 @@
 //! Tracker parameters and the method presets (`eventtrack6d`, `depth30`, `events-only`).
 
+use super::redetect::RedetectConfig;
 use crate::recon::IntensityFilterConfig;
 use crate::refine::{DepthTerm, EventTerm, IntensityTerm};
 use serde::{Deserialize, Serialize};
@@ -117,6 +118,8 @@ pub struct TrackerConfig {
     pub intensity_term: IntensityTerm,
     /// Quality thresholds.
     pub quality: QualityConfig,
+    /// Re-detection of objects that are not `tracking`, at depth frames.
+    pub redetect: RedetectConfig,
 }
 
 impl Default for TrackerConfig {
@@ -156,6 +159,7 @@ impl Default for TrackerConfig {
             event_term: EventTerm::default(),
             intensity_term: IntensityTerm::default(),
             quality: QualityConfig::default(),
+            redetect: RedetectConfig::default(),
         }
     }
 }
@@ -212,6 +216,8 @@ impl TrackingMethod {
             Self::EventsOnly => {
                 c.depth = DepthUse::FirstFrameOnly;
                 c.events = true;
+                // No depth after the first frame: nothing to re-detect with.
+                c.redetect.enabled = false;
             }
         }
         c

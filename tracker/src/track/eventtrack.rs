@@ -3,6 +3,7 @@
 
 use super::config::{DepthUse, TrackerConfig};
 use super::object::{ObjectTrack, TickInputs};
+use super::redetect::{Cluster, DepthBackground, cluster_centres};
 use super::{PoseEstimate, PoseTracker, TrackingState};
 use crate::geometry::{PinholeCamera, se3};
 use crate::mesh::Mesh;
@@ -11,7 +12,7 @@ use crate::render::{RenderError, Renderer, Scene, SceneObject};
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use std::sync::Arc;
 
 /// Why a tracker could not be built.
@@ -78,6 +79,8 @@ pub struct TrackerCounters {
     pub render_errors: u64,
     /// Depth frames at which the depth-only hypothesis replaced an object's event-driven estimate (all objects).
     pub depth_fallbacks: u64,
+    /// Depth frames at which re-detection moved an object that was not `tracking` (all objects).
+    pub redetections: u64,
 }
 
 /// The EventTrack6D tracker (and, through [`super::TrackingMethod`], its baselines).
@@ -93,6 +96,15 @@ pub struct EventTrack6d {
     depth_t_us: Option<i64>,
     last_tick_us: Option<i64>,
     counters: TrackerCounters,
+    redetection: Redetection,
+}
+
+/// Re-detection state shared by all objects: the learned background and reused buffers.
+struct Redetection {
+    background: DepthBackground,
+    foreground: Vec<Point3<f64>>,
+    seeds: Vec<(usize, Point3<f64>)>,
+    centres: Vec<Cluster>,
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -169,6 +181,15 @@ impl EventTrack6d {
         }
         let cam = rig.event_camera;
         let depth_cam = rig.depth.camera;
+        let cell = config.redetect.cell_px.max(1);
+        let redetection = Redetection {
+            background: DepthBackground::new(cell, depth_cam.width, depth_cam.height),
+            foreground: Vec::with_capacity(
+                (depth_cam.width / cell) as usize * (depth_cam.height / cell) as usize,
+            ),
+            seeds: Vec::with_capacity(128),
+            centres: Vec::with_capacity(config.redetect.candidates),
+        };
         Ok(Self {
             surface: EventSurface::new(cam.width, cam.height, config.intensity),
             depth: DepthFrame {
@@ -186,6 +207,7 @@ impl EventTrack6d {
             depth_t_us: None,
             last_tick_us: None,
             counters: TrackerCounters::default(),
+            redetection,
         })
     }
 
@@ -193,6 +215,7 @@ impl EventTrack6d {
     pub fn counters(&self) -> TrackerCounters {
         TrackerCounters {
             depth_fallbacks: self.objects.iter().map(|o| o.fallbacks).sum(),
+            redetections: self.objects.iter().map(|o| o.redetections).sum(),
             ..self.counters
         }
     }
@@ -235,6 +258,142 @@ impl EventTrack6d {
     /// Whether any object refines at this tick (the `depth30` baseline refines only at depth exposures).
     fn refines(&self, depth_now: bool) -> bool {
         self.config.depth != DepthUse::DepthFramesOnly || depth_now
+    }
+
+    /// At a depth frame: every object that is not `tracking` is checked, on depth alone, where it is predicted
+    /// and at the object-sized clusters of foreground (with the predicted orientation and with its longest axis
+    /// along the cluster's); it moves to the best place if that scores clearly better than the prediction.
+    fn redetect(&mut self, t_us: i64, dt_s: f64) {
+        let cfg = self.config.redetect;
+        let r = &mut self.redetection;
+        let mut foreground_ready = false;
+        for k in 0..self.objects.len() {
+            let o = &self.objects[k];
+            if o.state == TrackingState::Tracking || t_us < o.t_us {
+                continue;
+            }
+            if !foreground_ready {
+                r.foreground.clear();
+                let noise = self.config.depth_term;
+                let margin = |z: f64| {
+                    let sigma = noise.sigma_0 + noise.sigma_z2 * z * z;
+                    cfg.foreground_margin_m.max(cfg.foreground_sigmas * sigma)
+                };
+                r.background
+                    .foreground(&self.depth, &self.rig.depth, margin, &mut r.foreground);
+                foreground_ready = true;
+            }
+            r.centres.clear();
+            cluster_centres(
+                &r.foreground,
+                0.5 * o.diameter,
+                // The visible surface lies in front of the centre by about half the thinnest extent.
+                0.5 * (o.aabb_max - o.aabb_min).min(),
+                cfg.candidates,
+                &mut r.seeds,
+                &mut r.centres,
+            );
+            if r.centres.is_empty() {
+                continue;
+            }
+            let predicted = o.predicted;
+            let predicted_centre = o.center_at(&predicted);
+            let diameter = o.diameter;
+            let center_obj = o.center_obj;
+            // Samples the object's two largest box extents cover at 1 m.
+            let size = o.aabb_max - o.aabb_min;
+            // The object's longest box axis, object frame.
+            let long_axis = Vector3::ith_axis(size.imax()).into_inner();
+            let mut extent = size.data.0[0];
+            extent.sort_by(|a, b| b.total_cmp(a));
+            let min_support = cfg.min_support
+                * extent[0]
+                * extent[1]
+                * r.background.samples_per_m2_at_1m(&self.rig.depth);
+            let mut probe = |start: Isometry3<f64>| {
+                let o = &mut self.objects[k];
+                o.predicted = start;
+                self.scene[k].pose = start;
+                let roi = o.update_roi(&self.rig.event_camera, &self.config, t_us, false)?;
+                let scene = Scene::objects(&self.scene).geometry_only();
+                if self
+                    .renderer
+                    .render_roi(&scene, &self.rig.event_camera, &roi, &mut o.target)
+                    .is_err()
+                {
+                    self.counters.render_errors += 1;
+                    return None;
+                }
+                let inputs = TickInputs {
+                    t_us,
+                    dt_s,
+                    depth: Some(&self.depth),
+                    surface: &self.surface,
+                    camera: &self.rig.event_camera,
+                    depth_rig: &self.rig.depth,
+                };
+                let (fit, pose) = o.probe_depth(&inputs, &self.config)?;
+                // Ranked by the silhouette at the refined pose, in the same ROI.
+                self.scene[k].pose = pose;
+                let scene = Scene::objects(&self.scene).geometry_only();
+                if self
+                    .renderer
+                    .render_roi(&scene, &self.rig.event_camera, &roi, &mut o.target)
+                    .is_err()
+                {
+                    self.counters.render_errors += 1;
+                    return None;
+                }
+                // Both directions: model points the depth confirms, and depth at the object's range the model
+                // explains (a pose showing a small part of the object can fit that part perfectly).
+                Some((
+                    fit * o.silhouette_agreement(&pose, &self.config).sqrt(),
+                    pose,
+                ))
+            };
+            let here = probe(predicted).map_or(0.0, |(fit, _)| fit);
+            let mut best: Option<(f64, Isometry3<f64>)> = None;
+            for cluster in &r.centres {
+                let centre = cluster.centre;
+                if (centre - predicted_centre).norm() < 0.25 * diameter
+                    || (cluster.support as f64)
+                        < (min_support / (centre.z * centre.z).max(1e-6)).max(8.0)
+                {
+                    continue;
+                }
+                // Orientations: the predicted one, and the predicted one turned the least that lays the
+                // object's longest axis along the cluster's principal axis.
+                let current = predicted.rotation * long_axis;
+                let target = if current.dot(&cluster.axis) >= 0.0 {
+                    cluster.axis
+                } else {
+                    -cluster.axis
+                };
+                let aligned = UnitQuaternion::rotation_between(&current, &target)
+                    .map(|q| q * predicted.rotation)
+                    .filter(|_| current.angle(&target) > 15f64.to_radians());
+                for rotation in [Some(predicted.rotation), aligned].into_iter().flatten() {
+                    let start = Isometry3::from_parts(
+                        Translation3::from(centre.coords - rotation * center_obj),
+                        rotation,
+                    );
+                    if let Some((fit, pose)) = probe(start)
+                        && best.is_none_or(|(b, _)| fit > b)
+                    {
+                        best = Some((fit, pose));
+                    }
+                }
+            }
+            let o = &mut self.objects[k];
+            o.predicted = predicted;
+            if let Some((fit, pose)) = best
+                && fit >= cfg.min_score
+                && fit > here + cfg.margin
+            {
+                o.relocate(pose);
+            }
+            self.scene[k].pose = o.predicted;
+        }
     }
 }
 
@@ -288,6 +447,10 @@ impl PoseTracker for EventTrack6d {
             s.pose = o.predicted;
         }
         let refines = self.refines(depth_now);
+        if depth_now && refines && self.config.redetect.enabled {
+            self.redetection.background.update(&self.depth);
+            self.redetect(t_us, dt_s);
+        }
         let inputs = TickInputs {
             t_us,
             dt_s,

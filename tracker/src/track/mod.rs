@@ -13,6 +13,7 @@ mod hold;
 mod object;
 mod offline;
 mod overlay;
+mod redetect;
 mod validate;
 
 pub use bench_method::{InitNoise, TrackerMethod, recording_object, recording_rig};
@@ -22,6 +23,7 @@ pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, T
 pub use hold::HoldPoseTracker;
 pub use offline::{OfflineStats, track_recording};
 pub use overlay::{OverlayRenderer, OverlayWriter, overlay_strip};
+pub use redetect::RedetectConfig;
 pub use validate::InvalidParameter;
 
 use drivers::event::CdEvent;

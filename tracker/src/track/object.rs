@@ -35,6 +35,8 @@ pub(crate) struct ObjectTrack {
     low_ticks: u32,
     /// Depth frames at which the depth-only hypothesis replaced the event-driven estimate.
     pub fallbacks: u64,
+    /// Depth frames at which re-detection moved the object.
+    pub redetections: u64,
     depth_fit: f64,
     depth_frames_used: u32,
     pub roi: Option<Roi>,
@@ -84,6 +86,7 @@ impl ObjectTrack {
             state: TrackingState::Tracking,
             low_ticks: 0,
             fallbacks: 0,
+            redetections: 0,
             depth_fit: 1.0,
             depth_frames_used: 0,
             roi: None,
@@ -397,18 +400,6 @@ impl ObjectTrack {
             && config.depth_fallback_margin >= 0.0
             && let Some((t_anchor, anchor)) = self.anchor
         {
-            let fit = |pose: &Isometry3<f64>, view: &ModelView, depth: &DepthImage| {
-                let mut scratch = NormalEquations::default();
-                let s = depth_term.accumulate(
-                    view,
-                    pose,
-                    &self.center_obj,
-                    &roi_camera,
-                    depth,
-                    &mut scratch,
-                );
-                (s.inliers as f64 / s.points.max(1) as f64, s)
-            };
             // Starts: the previous depth frame's pose and, optionally, that pose carried on at the velocity
             // measured between depth frames (neither depends on what the events did since).
             let span = (inputs.t_us - t_anchor).max(0) as f64 * 1e-6;
@@ -420,31 +411,12 @@ impl ObjectTrack {
             ];
             let mut best: Option<(f64, Isometry3<f64>, DepthTermStats)> = None;
             for start in starts.into_iter().flatten() {
-                let mut fallback = start;
-                let mut fallback_offset = Vector6::zeros();
-                for _ in 0..config.iterations {
-                    let mut ne = NormalEquations::default();
-                    depth_term.accumulate(
-                        &self.view,
-                        &fallback,
-                        &self.center_obj,
-                        &roi_camera,
-                        &self.depth_now,
-                        &mut ne,
-                    );
-                    add_prior(&mut ne, &fallback_offset, prior_t, prior_r);
-                    let Some(step) = solve_step(&ne, config.damping, &bounds) else {
-                        break;
-                    };
-                    fallback_offset += step;
-                    fallback = apply_step(&fallback, &self.center_obj, &step);
-                }
-                let (f, stats) = fit(&fallback, &self.view, &self.depth_now);
-                if best.is_none_or(|(b, _, _)| f > b) {
-                    best = Some((f, fallback, stats));
+                let candidate = self.refine_on_depth(start, &roi_camera, config);
+                if best.is_none_or(|(b, _, _)| candidate.0 > b) {
+                    best = Some(candidate);
                 }
             }
-            let (main_fit, main_stats) = fit(&pose, &self.view, &self.depth_now);
+            let (main_fit, main_stats) = self.depth_fit_at(&pose, &roi_camera, config);
             match best {
                 Some((fallback_fit, fallback, fallback_stats))
                     if fallback_fit > main_fit + config.depth_fallback_margin =>
@@ -468,6 +440,128 @@ impl ObjectTrack {
         };
         let fit = depth_stats.filter(|_| depth_weight >= 1.0);
         self.finish(inputs, pose, fit, support, config);
+    }
+
+    /// Fraction of the model's visible points that agree with `self.depth_now` at `pose`, and the term's counts.
+    fn depth_fit_at(
+        &self,
+        pose: &Isometry3<f64>,
+        roi_camera: &PinholeCamera,
+        config: &TrackerConfig,
+    ) -> (f64, DepthTermStats) {
+        let mut scratch = NormalEquations::default();
+        let s = config.depth_term.accumulate(
+            &self.view,
+            pose,
+            &self.center_obj,
+            roi_camera,
+            &self.depth_now,
+            &mut scratch,
+        );
+        (s.inliers as f64 / s.points.max(1) as f64, s)
+    }
+
+    /// Depth-only refinement from `start` against `self.depth_now` (what `depth30` does at a depth frame): the
+    /// refined pose with its agreeing fraction and counts.
+    fn refine_on_depth(
+        &self,
+        start: Isometry3<f64>,
+        roi_camera: &PinholeCamera,
+        config: &TrackerConfig,
+    ) -> (f64, Isometry3<f64>, DepthTermStats) {
+        let bounds = StepBounds {
+            max_rotation: config.max_step_rotation_deg.to_radians(),
+            max_translation: config.max_step_translation_diameters * self.diameter,
+        };
+        let prior_t = 1.0 / (config.prior_translation_m * config.prior_translation_m);
+        let prior_r = 1.0 / config.prior_rotation_rad().powi(2);
+        let mut pose = start;
+        let mut offset = Vector6::zeros();
+        for _ in 0..config.iterations {
+            let mut ne = NormalEquations::default();
+            config.depth_term.accumulate(
+                &self.view,
+                &pose,
+                &self.center_obj,
+                roi_camera,
+                &self.depth_now,
+                &mut ne,
+            );
+            add_prior(&mut ne, &offset, prior_t, prior_r);
+            let Some(step) = solve_step(&ne, config.damping, &bounds) else {
+                break;
+            };
+            offset += step;
+            pose = apply_step(&pose, &self.center_obj, &step);
+        }
+        let (fit, stats) = self.depth_fit_at(&pose, roi_camera, config);
+        (fit, pose, stats)
+    }
+
+    /// Checks the hypothesis `self.predicted` against the fresh depth frame of `inputs` (re-detection): registers
+    /// the frame around it and refines on depth only from it, using the render the caller made at it in
+    /// `self.target`. Returns the agreeing fraction and the refined pose; `None` without a depth frame, ROI or
+    /// visible model.
+    pub fn probe_depth(
+        &mut self,
+        inputs: &TickInputs<'_>,
+        config: &TrackerConfig,
+    ) -> Option<(f64, Isometry3<f64>)> {
+        let roi = self.roi?;
+        let frame = inputs.depth?;
+        let roi_camera = inputs.camera.crop(&roi);
+        let start = self.predicted;
+        self.view.extract(
+            &self.target,
+            &roi_camera,
+            self.label,
+            &start,
+            config.max_surface_points,
+            config.max_contour_points,
+        );
+        if self.view.surface.is_empty() {
+            return None;
+        }
+        let c = self.center_at(&start);
+        let radius = 0.6 * config.roi_scale * self.diameter + 0.08;
+        self.carried
+            .register(frame, inputs.depth_rig, &c, radius, inputs.t_us);
+        self.carried
+            .render(&start, &roi_camera, &mut self.depth_now);
+        let (fit, pose, _) = self.refine_on_depth(start, &roi_camera, config);
+        Some((fit, pose))
+    }
+
+    /// How well the silhouette in `self.target` (rendered at `pose`) matches what the fresh depth image in
+    /// `self.depth_now` shows at the object's depth: pixels where model and measurement agree in depth, over
+    /// pixels where either the model is or a measurement lies within half a diameter of the centre's depth (an
+    /// intersection over union, in [0, 1]). Re-detection ranks places by it: unlike the agreeing fraction of model
+    /// points, it stays low for a pose that shows only a small part of the object where the depth sees all of it.
+    pub fn silhouette_agreement(&self, pose: &Isometry3<f64>, config: &TrackerConfig) -> f64 {
+        let c = self.center_at(pose);
+        let band = 0.5 * self.diameter;
+        let noise = config.depth_term;
+        let tolerance = 3.0 * (noise.sigma_0 + noise.sigma_z2 * c.z * c.z) + 0.005;
+        let (mut agree, mut union) = (0usize, 0usize);
+        let rendered = self.target.depth().iter().zip(self.target.mask());
+        for (&zm, (&zr, &label)) in self.depth_now.z.iter().zip(rendered) {
+            let model = label == self.label;
+            let measured = zm > 0.0 && (f64::from(zm) - c.z).abs() < band;
+            union += usize::from(model || measured);
+            agree += usize::from(model && zm > 0.0 && f64::from((zm - zr).abs()) < tolerance);
+        }
+        agree as f64 / union.max(1) as f64
+    }
+
+    /// Moves the object to `pose` found by re-detection: the motion estimate and the depth anchor, which belong
+    /// to the place it was lost at, are dropped; the next refinement starts there.
+    pub fn relocate(&mut self, pose: Isometry3<f64>) {
+        self.pose = normalise(pose);
+        self.predicted = self.pose;
+        self.velocity = Vector6::zeros();
+        self.anchor = None;
+        self.low_ticks = 0;
+        self.redetections += 1;
     }
 
     /// Replaces the latest estimate (see [`super::EventTrack6d::reset_pose`]).

@@ -278,6 +278,34 @@ impl TrackerConfig {
             UNIT,
         )?;
         check("quality.lost_below", f64::from(q.lost_below), unit, UNIT)?;
+        let r = &self.redetect;
+        check(
+            "redetect.cell_px",
+            f64::from(r.cell_px),
+            |v| (1.0..=64.0).contains(&v),
+            "must be 1 to 64 depth pixels",
+        )?;
+        check(
+            "redetect.foreground_margin_m",
+            r.foreground_margin_m,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check(
+            "redetect.candidates",
+            r.candidates as f64,
+            |v| v <= 16.0,
+            "must be at most 16",
+        )?;
+        check(
+            "redetect.foreground_sigmas",
+            r.foreground_sigmas,
+            non_neg,
+            NON_NEGATIVE,
+        )?;
+        check("redetect.min_support", r.min_support, non_neg, NON_NEGATIVE)?;
+        check("redetect.margin", r.margin, non_neg, NON_NEGATIVE)?;
+        check("redetect.min_score", r.min_score, unit, UNIT)?;
         Ok(())
     }
 }
@@ -303,5 +331,9 @@ mod tests {
         let e = parse("min_event_window_us = 5000\nmax_event_window_us = 1000").unwrap_err();
         assert_eq!(e.key, "max_event_window_us");
         assert_eq!(parse("[event_term]\nsearch_px = 0.0"), Ok(()));
+        let e = parse("[redetect]\ncell_px = 0").unwrap_err();
+        assert_eq!(e.key, "redetect.cell_px");
+        let e = parse("[redetect]\nmin_score = 1.5").unwrap_err();
+        assert_eq!(e.key, "redetect.min_score");
     }
 }

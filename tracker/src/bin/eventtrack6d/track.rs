@@ -197,6 +197,12 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             counters.depth_fallbacks
         );
     }
+    if counters.redetections > 0 {
+        eprintln!(
+            "{} depth frames re-detected an object that was not tracking (moved it to a better-fitting place)",
+            counters.redetections
+        );
+    }
     if counters.render_errors > 0 || counters.depth_frames_unused > 0 {
         eprintln!(
             "warning: {} render errors, {} depth frames unused",
