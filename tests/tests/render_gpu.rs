@@ -343,6 +343,18 @@ fn occluding_objects_and_background_match_in_full_frame_and_roi() {
     );
     assert_eq!(d.depth(), b.depth());
 
+    // Geometry only (what the tracker asks for): same geometry as the shaded render, no intensity.
+    let (g_cpu, g_gpu) = render_both(&mut cpu, &mut gpu, &scene.geometry_only(), Some(&roi));
+    assert_eq!(g_gpu.mask(), b.mask());
+    assert_eq!(g_gpu.depth(), b.depth());
+    assert!(b.intensity().iter().any(|&i| i > 0.0));
+    assert!(g_gpu.intensity().iter().all(|&i| i == 0.0));
+    check(
+        "occlusion ROI, geometry only",
+        &compare(&g_cpu, &g_gpu),
+        5000,
+    );
+
     // Every object is visible and partly hidden: fewer pixels than when rendered alone.
     for agreement in [&first, &full] {
         for label in [1, 2, 3, MASK_BACKGROUND] {

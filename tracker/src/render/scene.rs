@@ -64,8 +64,8 @@ pub struct Scene<'a> {
     pub lighting: Lighting,
     /// Near clipping distance along z, metres (> 0); surfaces closer than this are cut away.
     pub near: f64,
-    /// Whether the intensity channel is wanted. When `false` a backend may skip texturing and lighting and leave
-    /// intensity at 0 (the CPU renderer does); depth, normals and mask are unaffected.
+    /// Whether the intensity channel is wanted. When `false` the backends skip texturing and lighting and leave
+    /// intensity at 0; depth, normals and mask are unaffected.
     pub shade_intensity: bool,
 }
 

@@ -157,7 +157,7 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Stages the frame uniform: intrinsics, image size, near plane, lighting.
+    /// Stages the frame uniform: intrinsics, image size, near plane, lighting, whether to shade intensity.
     fn write_frame(&self, scene: &Scene<'_>, camera: &PinholeCamera) {
         let l = &scene.lighting;
         let light = l.direction.try_normalize(0.0).unwrap_or_default();
@@ -176,7 +176,7 @@ impl GpuRenderer {
             light.z,
             l.ambient,
             l.diffuse,
-            0.0,
+            if scene.shade_intensity { 1.0 } else { 0.0 },
             0.0,
             0.0,
         ];

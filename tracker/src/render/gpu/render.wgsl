@@ -12,7 +12,7 @@ struct Frame {
     size: vec4<f32>,
     // Unit direction towards the light (camera frame), ambient term.
     light: vec4<f32>,
-    // Diffuse term, unused x3.
+    // Diffuse term, shade flag (1: shade intensity, 0: geometry only, intensity 0), unused x2.
     diffuse: vec4<f32>,
 }
 
@@ -130,12 +130,15 @@ fn fs_main(f: VertexOut) -> @location(0) vec4<u32> {
     if (dot(n, f.view) > 0.0) {
         n = -n;
     }
-    let m = materials[f.material];
-    var albedo = m.albedo;
-    if (m.width > 0u) {
-        albedo = sample(m, f.uv);
+    var intensity = 0.0;
+    if (frame.diffuse.y > 0.5) {
+        let m = materials[f.material];
+        var albedo = m.albedo;
+        if (m.width > 0u) {
+            albedo = sample(m, f.uv);
+        }
+        intensity = albedo * (frame.light.w + frame.diffuse.x * max(dot(n, frame.light.xyz), 0.0));
     }
-    let intensity = albedo * (frame.light.w + frame.diffuse.x * max(dot(n, frame.light.xyz), 0.0));
     let nz_mask = (pack2x16snorm(vec2<f32>(n.z, 0.0)) & 0xffffu) | (instance.mask.x << 16u);
     return vec4<u32>(bitcast<u32>(f.view.z), bitcast<u32>(intensity), pack2x16snorm(n.xy), nz_mask);
 }
