@@ -8,7 +8,7 @@ use super::{PoseEstimate, PoseTracker, TrackingState};
 use crate::geometry::{PinholeCamera, se3};
 use crate::mesh::Mesh;
 use crate::recon::{DepthRig, EventSurface};
-use crate::render::{RenderError, Renderer, Scene, SceneObject};
+use crate::render::{RenderError, RenderTarget, Renderer, Scene, SceneObject};
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
@@ -315,13 +315,17 @@ impl EventTrack6d {
                 o.predicted = start;
                 self.scene[k].pose = start;
                 let roi = o.update_roi(&self.rig.event_camera, &self.config, t_us, false)?;
-                let scene = Scene::objects(&self.scene).geometry_only();
-                if self
-                    .renderer
-                    .render_roi(&scene, &self.rig.event_camera, &roi, &mut o.target)
-                    .is_err()
-                {
-                    self.counters.render_errors += 1;
+                let camera = &self.rig.event_camera;
+                let mut render = |scene: &[SceneObject], target: &mut RenderTarget| {
+                    let scene = Scene::objects(scene).geometry_only();
+                    let ok = self
+                        .renderer
+                        .render_roi(&scene, camera, &roi, target)
+                        .is_ok();
+                    self.counters.render_errors += u64::from(!ok);
+                    ok
+                };
+                if !render(&self.scene, &mut o.target) {
                     return None;
                 }
                 let inputs = TickInputs {
@@ -335,13 +339,7 @@ impl EventTrack6d {
                 let (fit, pose) = o.probe_depth(&inputs, &self.config)?;
                 // Ranked by the silhouette at the refined pose, in the same ROI.
                 self.scene[k].pose = pose;
-                let scene = Scene::objects(&self.scene).geometry_only();
-                if self
-                    .renderer
-                    .render_roi(&scene, &self.rig.event_camera, &roi, &mut o.target)
-                    .is_err()
-                {
-                    self.counters.render_errors += 1;
+                if !render(&self.scene, &mut o.target) {
                     return None;
                 }
                 // Both directions: model points the depth confirms, and depth at the object's range the model
