@@ -1,0 +1,334 @@
+//! One tracked object's state and its per-tick refinement.
+
+mod depth_check;
+mod refine;
+
+use super::config::TrackerConfig;
+use super::estimate::TrackingState;
+use crate::geometry::{PinholeCamera, Roi};
+use crate::recon::{CarriedDepth, DepthImage, DepthRig, EventSurface};
+use crate::refine::{
+    DepthTermStats, EventEdges, IntensityEdges, ModelView, NormalEquations, apply_step,
+};
+use crate::render::RenderTarget;
+use drivers::recording::DepthFrame;
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3, Vector6};
+
+/// A tracked object: its model, its state and the buffers its refinement reuses every tick.
+#[derive(Debug)]
+pub(crate) struct ObjectTrack {
+    pub label: u16,
+    pub diameter: f64,
+    pub center_obj: Vector3<f64>,
+    pub aabb_min: Vector3<f64>,
+    pub aabb_max: Vector3<f64>,
+    /// Latest estimate and its time.
+    pub pose: Isometry3<f64>,
+    pub t_us: i64,
+    /// Estimate before the latest, for interpolation.
+    pub previous: Option<(i64, Isometry3<f64>)>,
+    /// Smoothed velocity of the centre (m/s) and angular velocity (rad/s), camera frame.
+    pub velocity: Vector6<f64>,
+    pub predicted: Isometry3<f64>,
+    /// The estimate at the latest fresh depth frame (time, pose).
+    anchor: Option<(i64, Isometry3<f64>)>,
+    pub quality: f32,
+    pub state: TrackingState,
+    low_ticks: u32,
+    /// Depth frames at which the depth-only hypothesis replaced the event-driven estimate.
+    pub fallbacks: u64,
+    /// Depth frames at which re-detection moved the object.
+    pub redetections: u64,
+    depth_fit: f64,
+    depth_frames_used: u32,
+    pub roi: Option<Roi>,
+    pub target: RenderTarget,
+    view: ModelView,
+    carried: CarriedDepth,
+    depth_now: DepthImage,
+    edges: EventEdges,
+    intensity_edges: IntensityEdges,
+}
+
+/// Per-tick inputs shared by every object.
+pub(crate) struct TickInputs<'a> {
+    pub t_us: i64,
+    pub dt_s: f64,
+    pub depth: Option<&'a DepthFrame>,
+    pub surface: &'a EventSurface,
+    pub camera: &'a PinholeCamera,
+    pub depth_rig: &'a DepthRig,
+}
+
+impl ObjectTrack {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        label: u16,
+        diameter: f64,
+        aabb_min: Vector3<f64>,
+        aabb_max: Vector3<f64>,
+        pose: Isometry3<f64>,
+        t_us: i64,
+        config: &TrackerConfig,
+    ) -> Self {
+        let n = config.roi_size as usize;
+        Self {
+            label,
+            diameter,
+            center_obj: (aabb_min + aabb_max) * 0.5,
+            aabb_min,
+            aabb_max,
+            pose,
+            t_us,
+            previous: None,
+            velocity: Vector6::zeros(),
+            predicted: pose,
+            anchor: None,
+            quality: 1.0,
+            state: TrackingState::Tracking,
+            low_ticks: 0,
+            fallbacks: 0,
+            redetections: 0,
+            depth_fit: 1.0,
+            depth_frames_used: 0,
+            roi: None,
+            target: RenderTarget::with_capacity(config.roi_size, config.roi_size),
+            view: ModelView::with_capacity(config.max_surface_points, config.max_contour_points),
+            carried: CarriedDepth::new(),
+            depth_now: DepthImage {
+                width: config.roi_size,
+                height: config.roi_size,
+                z: Vec::with_capacity(n * n),
+            },
+            edges: EventEdges::default(),
+            intensity_edges: IntensityEdges::default(),
+        }
+    }
+
+    /// The object's centre in the camera frame at `pose`.
+    pub fn center_at(&self, pose: &Isometry3<f64>) -> Point3<f64> {
+        pose * Point3::from(self.center_obj)
+    }
+
+    /// Predicts the pose `dt_s` after the latest estimate (constant velocity about the centre).
+    pub fn predict(&mut self, dt_s: f64, config: &TrackerConfig) {
+        self.predicted = if config.prediction && self.state != TrackingState::Lost {
+            let mut xi = self.velocity * (dt_s * config.prediction_gain);
+            if !config.predict_rotation {
+                xi.fixed_rows_mut::<3>(3).fill(0.0);
+            }
+            apply_step(&self.pose, &self.center_obj, &xi)
+        } else {
+            self.pose
+        };
+    }
+
+    /// The ROI around the predicted pose, if the object is in front of the camera. At a depth exposure
+    /// (`depth_due`) with the extrapolated depth fallback on, it is widened to also hold the object where the
+    /// previous depth pose carried on at the measured velocity puts it, so the depth image covers that start too.
+    pub fn update_roi(
+        &mut self,
+        camera: &PinholeCamera,
+        config: &TrackerConfig,
+        t_us: i64,
+        depth_due: bool,
+    ) -> Option<Roi> {
+        let mut c = self.center_at(&self.predicted);
+        let mut scale = config.roi_scale;
+        if depth_due
+            && config.depth_fallback_extrapolate
+            && config.depth_fallback_margin >= 0.0
+            && config.roi_widen_at_depth
+            && let Some((t_anchor, anchor)) = self.anchor
+        {
+            let span = (t_us - t_anchor).max(0) as f64 * 1e-6;
+            let start = apply_step(&anchor, &self.center_obj, &(self.velocity * span));
+            let other = self.center_at(&start);
+            let gap = (other - c).norm();
+            if gap.is_finite() && gap > 0.1 * self.diameter {
+                c = Point3::from((c.coords + other.coords) * 0.5);
+                scale += gap / self.diameter;
+            }
+        }
+        // Behind the camera: no ROI (checked here so the lost path does not build an error message per tick).
+        if !(c.z > 1e-3 && c.coords.iter().all(|v| v.is_finite())) {
+            self.roi = None;
+            return None;
+        }
+        self.roi = Roi::around_object(camera, &c, self.diameter, scale, config.roi_size).ok();
+        self.roi
+    }
+
+    /// Image speed of the object's outline predicted from the velocity, full-image pixels per second.
+    fn image_speed(&self, camera: &PinholeCamera) -> f64 {
+        let c = self.center_at(&self.predicted);
+        let z = c.z.max(0.05);
+        let v = self.velocity;
+        let lateral = (v[0] * v[0] + v[1] * v[1]).sqrt() + (v[2].abs() * self.diameter * 0.5 / z);
+        let angular = Vector3::new(v[3], v[4], v[5]).norm() * self.diameter * 0.5;
+        camera.fx * (lateral + angular) / z
+    }
+
+    /// Moves the object to `pose` found by re-detection: the motion estimate and the depth anchor, which belong
+    /// to the place it was lost at, are dropped; the next refinement starts there.
+    pub fn relocate(&mut self, pose: Isometry3<f64>) {
+        self.pose = normalise(pose);
+        self.predicted = self.pose;
+        self.velocity = Vector6::zeros();
+        self.anchor = None;
+        self.low_ticks = 0;
+        self.redetections += 1;
+    }
+
+    /// Replaces the latest estimate (see [`super::EventTrack6d::reset_pose`]).
+    pub fn reset(&mut self, t_us: i64, pose: Isometry3<f64>) {
+        self.previous = Some((self.t_us, self.pose));
+        self.pose = normalise(pose);
+        self.predicted = self.pose;
+        self.t_us = t_us;
+        self.low_ticks = 0;
+        self.state = TrackingState::Tracking;
+    }
+
+    /// Holds the latest estimate at `t_us` without refining (`depth30` between depth frames): pose, quality and
+    /// state stay what the last refinement said.
+    pub fn hold(&mut self, t_us: i64) {
+        self.previous = Some((self.t_us, self.pose));
+        self.t_us = t_us;
+    }
+
+    /// Records the new estimate: quality, state, velocity and the pose history.
+    fn finish(
+        &mut self,
+        inputs: &TickInputs<'_>,
+        pose: Isometry3<f64>,
+        fresh_depth: Option<DepthTermStats>,
+        event_support: Option<f64>,
+        config: &TrackerConfig,
+    ) {
+        // Quality evidence: depth agreement at the last exposure, visibility, event support of the outline.
+        let mut visibility = 1.0;
+        if let Some(s) = fresh_depth {
+            let used = s.measured.max(1) as f64;
+            self.depth_fit = s.inliers as f64 / used;
+            visibility = (s.measured as f64 / s.points.max(1) as f64).min(1.0);
+        }
+        let in_view = self.roi.is_some() && self.view.visible_pixels > 0;
+        let support = event_support.unwrap_or(1.0);
+        let quality = if in_view {
+            self.depth_fit * (0.4 + 0.6 * visibility) * (0.6 + 0.4 * support)
+        } else {
+            0.0
+        };
+        self.quality = quality.clamp(0.0, 1.0) as f32;
+        let q = config.quality;
+        if self.quality < q.lost_below {
+            self.low_ticks += 1;
+        } else {
+            self.low_ticks = 0;
+        }
+        self.state = if self.low_ticks >= q.lost_after_ticks {
+            TrackingState::Lost
+        } else if self.quality < q.degraded_below {
+            TrackingState::Degraded
+        } else {
+            TrackingState::Tracking
+        };
+
+        // Velocity: at a fresh depth frame from the motion since the previous one (anchored on depth, so a drift
+        // the motion model itself introduced between frames is not fed back); otherwise from the last tick,
+        // weighted less.
+        let (reference, span, a) = match (fresh_depth.is_some(), self.anchor) {
+            (true, Some((t0, p0))) if inputs.t_us > t0 => (
+                p0,
+                (inputs.t_us - t0) as f64 * 1e-6,
+                config.velocity_smoothing_depth,
+            ),
+            _ => (self.pose, inputs.dt_s, config.velocity_smoothing),
+        };
+        if fresh_depth.is_some() {
+            self.anchor = Some((inputs.t_us, pose));
+        }
+        if span > 0.0 && self.state != TrackingState::Lost {
+            let c0 = self.center_at(&reference);
+            let c1 = self.center_at(&pose);
+            let dv = (c1 - c0) / span;
+            let dw = (pose.rotation * reference.rotation.inverse()).scaled_axis() / span;
+            let measured = Vector6::new(dv.x, dv.y, dv.z, dw.x, dw.y, dw.z);
+            let a = a.clamp(0.0, 1.0);
+            let mut v = a * measured + (1.0 - a) * self.velocity;
+            let lin = v.fixed_rows::<3>(0).norm();
+            if lin > config.max_speed {
+                v.fixed_rows_mut::<3>(0).scale_mut(config.max_speed / lin);
+            }
+            let ang = v.fixed_rows::<3>(3).norm();
+            if ang > config.max_angular_speed {
+                v.fixed_rows_mut::<3>(3)
+                    .scale_mut(config.max_angular_speed / ang);
+            }
+            self.velocity = v;
+        } else if self.state == TrackingState::Lost {
+            self.velocity = Vector6::zeros();
+        }
+        self.previous = Some((self.t_us, self.pose));
+        self.pose = normalise(pose);
+        self.t_us = inputs.t_us;
+    }
+}
+
+/// Adds the prior towards the refinement's start: `offset` is the increment accumulated so far, `prior_t` and
+/// `prior_r` the inverse variances of translation (1/m^2) and rotation (1/rad^2).
+fn add_prior(ne: &mut NormalEquations, offset: &Vector6<f64>, prior_t: f64, prior_r: f64) {
+    for k in 0..6 {
+        let w = if k < 3 { prior_t } else { prior_r };
+        ne.h[(k, k)] += w;
+        ne.g[k] += w * offset[k];
+    }
+}
+
+/// Re-normalises the rotation (drift from repeated composition).
+fn normalise(pose: Isometry3<f64>) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::from(pose.translation.vector),
+        UnitQuaternion::new_normalize(*pose.rotation.quaternion()),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn contains(roi: &Roi, camera: &PinholeCamera, p: &Point3<f64>, margin_px: f64) -> bool {
+        let uv = camera.project(p).expect("in front");
+        uv.x >= roi.x + margin_px
+            && uv.y >= roi.y + margin_px
+            && uv.x <= roi.x + roi.width - margin_px
+            && uv.y <= roi.y + roi.height - margin_px
+    }
+
+    #[test]
+    fn roi_at_a_depth_exposure_widens_to_the_extrapolated_start_only_when_asked() {
+        let camera = PinholeCamera::new(600.0, 600.0, 639.5, 359.5, 1280, 720).unwrap();
+        let mut config = TrackerConfig::default();
+        let at = |x: f64| Isometry3::translation(x, 0.0, 0.6);
+        let half = Vector3::new(0.05, 0.05, 0.05);
+        let mut track = ObjectTrack::new(1, 0.1, -half, half, at(0.0), 0, &config);
+        // The previous depth pose 33 ms ago at x = 0, moving at 3 m/s along x: the extrapolated start is
+        // 10 cm (one diameter) away from a prediction that stayed at x = 0.
+        track.anchor = Some((0, at(0.0)));
+        track.velocity = Vector6::new(3.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        track.predicted = at(0.0);
+        let t = 33_333;
+        let extrapolated = Point3::new(0.1, 0.0, 0.6);
+        let plain = track.update_roi(&camera, &config, t, true).unwrap();
+        assert!(!contains(&plain, &camera, &extrapolated, 0.0));
+        config.roi_widen_at_depth = true;
+        let between = track.update_roi(&camera, &config, t, false).unwrap();
+        assert_eq!(between, plain, "only depth exposures widen");
+        let wide = track.update_roi(&camera, &config, t, true).unwrap();
+        // Half a diameter (50 px at 0.6 m) of the object on either side fits in the ROI.
+        for p in [Point3::new(0.0, 0.0, 0.6), extrapolated] {
+            assert!(contains(&wide, &camera, &p, 40.0), "{wide:?} misses {p:?}");
+        }
+    }
+}

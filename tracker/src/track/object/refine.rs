@@ -1,0 +1,287 @@
+//! The per-tick refinement of one object: events, carried depth and intensity in a few Gauss-Newton steps,
+//! with the depth-only safety net at fresh depth frames.
+
+use super::{ObjectTrack, TickInputs, add_prior};
+use crate::refine::{
+    DepthTermStats, EventTermKind, NormalEquations, StepBounds, apply_step, solve_step,
+};
+use crate::track::config::{DepthUse, TrackerConfig};
+use crate::track::estimate::TrackingState;
+use nalgebra::{Isometry3, Translation3, Vector3, Vector6};
+
+impl ObjectTrack {
+    /// Refines the predicted pose at this tick from the render already in `self.target` (made at the predicted
+    /// poses of all objects) and updates quality, state and velocity.
+    pub fn refine(&mut self, inputs: &TickInputs<'_>, config: &TrackerConfig) {
+        let Some(roi) = self.roi else {
+            self.finish(inputs, self.predicted, None, None, config);
+            return;
+        };
+        let roi_camera = inputs.camera.crop(&roi);
+        let predicted = self.predicted;
+        self.view.extract(
+            &self.target,
+            &roi_camera,
+            self.label,
+            &predicted,
+            config.max_surface_points,
+            config.max_contour_points,
+        );
+
+        // Depth: which D_t is available at this tick, and its weight.
+        let fresh = inputs.depth.is_some()
+            && match config.depth {
+                DepthUse::EveryTick | DepthUse::DepthFramesOnly => true,
+                DepthUse::FirstFrameOnly => self.depth_frames_used == 0,
+                DepthUse::Off => false,
+            };
+        let mut depth_weight = 0.0;
+        if fresh {
+            if let Some(frame) = inputs.depth {
+                let c = self.center_at(&predicted);
+                let radius = 0.6 * config.roi_scale * self.diameter + 0.08;
+                self.carried
+                    .register(frame, inputs.depth_rig, &c, radius, inputs.t_us);
+                self.carried
+                    .render(&predicted, &roi_camera, &mut self.depth_now);
+                depth_weight = 1.0;
+            }
+        } else if config.depth == DepthUse::EveryTick && !self.carried.is_empty() {
+            // Rendered below, at the pose the refinement starts from.
+            depth_weight = config.carried_depth_weight;
+        }
+        let refine_now = match config.depth {
+            DepthUse::DepthFramesOnly => fresh,
+            _ => true,
+        };
+        if !refine_now {
+            self.finish(inputs, self.pose, None, None, config);
+            return;
+        }
+
+        let depth_term = config.depth_term;
+        let event_term = config.event_term;
+        let use_events = config.events && !self.view.contour.is_empty();
+        let intensity_term = config.intensity_term;
+        let use_intensity = use_events && intensity_term.weight > 0.0;
+        let contrast_max = use_events && event_term.kind == EventTermKind::ContrastMax;
+        let use_event_residuals = use_events && !contrast_max;
+        let mut contrast_velocity = None;
+        let mut window_s = 0.0;
+        if use_events {
+            let speed = self.image_speed(inputs.camera).max(1.0);
+            let window = ((config.event_window_px / speed) * 1e6) as i64;
+            let window = window.clamp(config.min_event_window_us, config.max_event_window_us);
+            window_s = window as f64 * 1e-6;
+            self.edges.collect(
+                &event_term,
+                inputs.surface,
+                &roi,
+                self.target.mask(),
+                self.label,
+                inputs.t_us,
+                window,
+                config.max_event_points,
+            );
+            if contrast_max {
+                let c = self.center_at(&predicted);
+                self.edges.lift_events(
+                    inputs.surface,
+                    inputs.camera,
+                    self.target.depth(),
+                    self.target.mask(),
+                    self.label,
+                    inputs.t_us,
+                    window,
+                    c.z,
+                    config.max_event_points * 8,
+                );
+                contrast_velocity = Some(self.edges.maximise_contrast(
+                    inputs.camera,
+                    &c,
+                    &self.velocity,
+                    event_term.contrast_step_translation,
+                    event_term.contrast_step_rotation,
+                    event_term.contrast_rounds,
+                ));
+            }
+        }
+        let bounds = StepBounds {
+            max_rotation: config.max_step_rotation_deg.to_radians(),
+            max_translation: config.max_step_translation_diameters * self.diameter,
+        };
+        let mut pose = match contrast_velocity {
+            // The motion contrast maximisation found, from the previous estimate.
+            Some(xi) => {
+                let span = (inputs.t_us - self.t_us).max(0) as f64 * 1e-6;
+                apply_step(&self.pose, &self.center_obj, &(xi * span))
+            }
+            None => predicted,
+        };
+        // Until two depth frames have measured the motion, and while the estimate is not trusted, the whole
+        // range is searched.
+        let search_range = if self.depth_frames_used < 2
+            || (config.search_wide_when_degraded && self.state != TrackingState::Tracking)
+        {
+            event_term.search_px
+        } else {
+            // max-then-min rather than clamp: a config with min > max must not panic (the range is then max).
+            (event_term.search_speed_factor * self.image_speed(inputs.camera) * inputs.dt_s)
+                .max(event_term.search_min_px)
+                .min(event_term.search_px)
+        };
+        if use_event_residuals
+            && let Some([du, dv]) = self.edges.search_shift(
+                &event_term,
+                &self.view,
+                &predicted,
+                inputs.camera,
+                search_range,
+            )
+        {
+            // Move the centre laterally by the image shift at its depth.
+            let c = self.center_at(&predicted);
+            let shift = Vector3::new(
+                du * c.z / inputs.camera.fx,
+                dv * c.z / inputs.camera.fy,
+                0.0,
+            );
+            pose = Isometry3::from_parts(
+                Translation3::from(predicted.translation.vector + shift),
+                predicted.rotation,
+            );
+        }
+        if depth_weight > 0.0 && !fresh {
+            self.carried.render(&pose, &roi_camera, &mut self.depth_now);
+        }
+        let mut depth_stats = None;
+        let mut offset = Vector6::zeros();
+        let prior_t = 1.0 / (config.prior_translation_m * config.prior_translation_m);
+        let prior_r = 1.0 / config.prior_rotation_rad().powi(2);
+        for it in 0..config.iterations {
+            let mut ne = NormalEquations::default();
+            if depth_weight > 0.0 {
+                let mut d = NormalEquations::default();
+                let s = depth_term.accumulate(
+                    &self.view,
+                    &pose,
+                    &self.center_obj,
+                    &roi_camera,
+                    &self.depth_now,
+                    &mut d,
+                );
+                depth_stats = Some(s);
+                ne.add_scaled(&d, depth_weight);
+            }
+            if use_event_residuals {
+                if it % 2 == 0 {
+                    self.edges.associate(
+                        &event_term,
+                        &self.view,
+                        &pose,
+                        &self.center_obj,
+                        inputs.camera,
+                        &self.velocity,
+                        window_s,
+                    );
+                }
+                let mut e = NormalEquations::default();
+                self.edges.accumulate(
+                    &event_term,
+                    &self.view,
+                    &pose,
+                    &self.center_obj,
+                    inputs.camera,
+                    &mut e,
+                );
+                ne.add_scaled(&e, config.event_weight);
+            }
+            if use_intensity {
+                if it % 2 == 0 {
+                    self.intensity_edges.associate(
+                        &intensity_term,
+                        &self.view,
+                        &pose,
+                        inputs.camera,
+                        inputs.surface,
+                        inputs.t_us,
+                        roi.width / f64::from(roi.out_width.max(1)),
+                    );
+                }
+                let mut e = NormalEquations::default();
+                self.intensity_edges.accumulate(
+                    &intensity_term,
+                    &self.view,
+                    &pose,
+                    &self.center_obj,
+                    inputs.camera,
+                    &mut e,
+                );
+                ne.add_scaled(&e, intensity_term.weight);
+            }
+            // Prior towards the prediction: keeps directions the data cannot see (e.g. rotation about a
+            // symmetry axis) where the motion model puts them.
+            add_prior(&mut ne, &offset, prior_t, prior_r);
+            let Some(step) = solve_step(&ne, config.damping, &bounds) else {
+                break;
+            };
+            offset += step;
+            pose = apply_step(&pose, &self.center_obj, &step);
+            let (t, r) = (
+                step.fixed_rows::<3>(0).norm(),
+                step.fixed_rows::<3>(3).norm(),
+            );
+            if t < 1e-5 && r < 1e-4 {
+                break;
+            }
+        }
+        // Safety net at a fresh depth frame: the depth-only refinement from the previous depth frame's pose
+        // (what `depth30` would report). If events led the estimate astray, the depth image says so: keep
+        // whichever hypothesis more model points agree with.
+        if fresh
+            && use_events
+            && config.depth_fallback_margin >= 0.0
+            && let Some((t_anchor, anchor)) = self.anchor
+        {
+            // Starts: the previous depth frame's pose and, optionally, that pose carried on at the velocity
+            // measured between depth frames (neither depends on what the events did since).
+            let span = (inputs.t_us - t_anchor).max(0) as f64 * 1e-6;
+            let starts = [
+                Some(anchor),
+                config
+                    .depth_fallback_extrapolate
+                    .then(|| apply_step(&anchor, &self.center_obj, &(self.velocity * span))),
+            ];
+            let mut best: Option<(f64, Isometry3<f64>, DepthTermStats)> = None;
+            for start in starts.into_iter().flatten() {
+                let candidate = self.refine_on_depth(start, &roi_camera, config);
+                if best.is_none_or(|(b, _, _)| candidate.0 > b) {
+                    best = Some(candidate);
+                }
+            }
+            let (main_fit, main_stats) = self.depth_fit_at(&pose, &roi_camera, config);
+            match best {
+                Some((fallback_fit, fallback, fallback_stats))
+                    if fallback_fit > main_fit + config.depth_fallback_margin =>
+                {
+                    pose = fallback;
+                    depth_stats = Some(fallback_stats);
+                    self.fallbacks += 1;
+                }
+                _ => depth_stats = Some(main_stats),
+            }
+        }
+        if fresh {
+            self.depth_frames_used += 1;
+            self.carried
+                .attach_to_object(&pose, &self.aabb_min, &self.aabb_max, 0.01);
+        }
+        let support = if use_events && self.image_speed(inputs.camera) > 150.0 {
+            self.edges.contour_support(&self.view, &pose, inputs.camera)
+        } else {
+            None
+        };
+        let fit = depth_stats.filter(|_| depth_weight >= 1.0);
+        self.finish(inputs, pose, fit, support, config);
+    }
+}
