@@ -228,20 +228,22 @@ impl EventEdges {
             let j = ((y as f64 + 0.5 - roi.y) * sy) as i64;
             if j >= 0 && j < i64::from(h) && y >= 0 {
                 let row = j as usize * w as usize;
-                for x in surface.recent_in_row(
+                let (bins, hits) = (&self.column_bins, &mut self.hits);
+                surface.for_each_recent_in_row(
                     y as u32,
                     x0 as u32,
                     x1.max(x0) as u32,
                     step as usize,
                     since,
                     t_us,
-                ) {
-                    let i = self.column_bins[(x as i64 - x0) as usize];
-                    if i >= 0 {
-                        let cell = &mut self.hits[row + i as usize];
-                        *cell = cell.saturating_add(1);
-                    }
-                }
+                    |x| {
+                        let i = bins[(x as i64 - x0) as usize];
+                        if i >= 0 {
+                            let cell = &mut hits[row + i as usize];
+                            *cell = cell.saturating_add(1);
+                        }
+                    },
+                );
             }
             y += step;
         }
@@ -283,14 +285,20 @@ impl EventEdges {
                 .zip(mid)
                 .zip(below)
                 .map(|((a, m), b)| a + m + b);
-            for ((k, (&hit, count)), i) in kept
-                .iter_mut()
-                .zip(hits.iter().zip(counts))
-                .zip(row.clone())
-            {
-                *k = hit > 0 && count >= min;
-                bins += usize::from(*k);
-                outside += usize::from(*k && mask.get(i).copied() != Some(id));
+            let cells = kept.iter_mut().zip(hits.iter().zip(counts));
+            if let Some(labels) = mask.get(row.clone()) {
+                for ((k, (&hit, count)), &label) in cells.zip(labels) {
+                    *k = (hit > 0) & (count >= min);
+                    bins += usize::from(*k);
+                    outside += usize::from(*k & (label != id));
+                }
+            } else {
+                // A mask shorter than the grid: bins past its end count as off the object.
+                for ((k, (&hit, count)), i) in cells.zip(row.clone()) {
+                    *k = (hit > 0) & (count >= min);
+                    bins += usize::from(*k);
+                    outside += usize::from(*k && mask.get(i).copied() != Some(id));
+                }
             }
         }
         self.stats.bins += bins;
