@@ -17,6 +17,30 @@ fn truth() -> Isometry3<f64> {
     )
 }
 
+/// The 160x160 ROI of the 0.17 m-diameter test object around `pose` in the VGA camera, with the object (id 1)
+/// rendered there into `target` (geometry only: refinement reads depth, normals and mask). Returns the ROI and its
+/// camera.
+fn render_roi_at(
+    renderer: &mut CpuRenderer,
+    id: tracker::render::MeshId,
+    pose: &Isometry3<f64>,
+    target: &mut RenderTarget,
+) -> (Roi, tracker::geometry::PinholeCamera) {
+    let cam = common::vga();
+    let roi =
+        Roi::around_object(&cam, &(pose * nalgebra::Point3::origin()), 0.17, 1.2, 160).unwrap();
+    let roi_cam = cam.crop(&roi);
+    let scene = [SceneObject {
+        mesh: id,
+        pose: *pose,
+        id: 1,
+    }];
+    renderer
+        .render(&Scene::objects(&scene).geometry_only(), &roi_cam, target)
+        .unwrap();
+    (roi, roi_cam)
+}
+
 fn refine_depth(start: Isometry3<f64>, iterations: usize) -> Isometry3<f64> {
     let cam = common::vga();
     let mesh = Arc::new(common::cube(0.1));
@@ -173,17 +197,7 @@ fn refine_events(
     // Moving right at `speed` m/s: sets each contour point's expected band of events in the window.
     let motion = nalgebra::Vector6::new(speed, 0.0, 0.0, 0.0, 0.0, 0.0);
     for _ in 0..rounds {
-        let roi =
-            Roi::around_object(&cam, &(pose * nalgebra::Point3::origin()), 0.17, 1.2, 160).unwrap();
-        let roi_cam = cam.crop(&roi);
-        let scene = [SceneObject {
-            mesh: id,
-            pose,
-            id: 1,
-        }];
-        renderer
-            .render(&Scene::objects(&scene), &roi_cam, &mut target)
-            .unwrap();
+        let (roi, roi_cam) = render_roi_at(renderer, id, &pose, &mut target);
         view.extract(&target, &roi_cam, 1, &pose, 600, 200);
         edges.collect(term, surface, &roi, target.mask(), 1, 10_000, 2_000, 400);
         edges.associate(term, &view, &pose, &center, &cam, &motion, 0.002);
@@ -281,18 +295,8 @@ fn outline_search_finds_a_shift_beyond_the_refinement_range() {
     // 25 mm to the left at 0.5 m: about 26 px, beyond the residuals' 12 px reach.
     let start = lateral(-0.025);
     let term = EventTerm::default();
-    let roi =
-        Roi::around_object(&cam, &(start * nalgebra::Point3::origin()), 0.17, 1.2, 160).unwrap();
-    let roi_cam = cam.crop(&roi);
     let mut target = RenderTarget::new();
-    let scene = [SceneObject {
-        mesh: id,
-        pose: start,
-        id: 1,
-    }];
-    renderer
-        .render(&Scene::objects(&scene), &roi_cam, &mut target)
-        .unwrap();
+    let (roi, roi_cam) = render_roi_at(&mut renderer, id, &start, &mut target);
     let mut view = ModelView::with_capacity(600, 200);
     view.extract(&target, &roi_cam, 1, &start, 600, 200);
     let mut edges = EventEdges::default();
@@ -337,21 +341,7 @@ fn refine_intensity(
     let mut view = ModelView::with_capacity(600, 200);
     let mut edges = IntensityEdges::default();
     for _ in 0..rounds {
-        let roi =
-            Roi::around_object(&cam, &(pose * nalgebra::Point3::origin()), 0.17, 1.2, 160).unwrap();
-        let roi_cam = cam.crop(&roi);
-        let scene = [SceneObject {
-            mesh: id,
-            pose,
-            id: 1,
-        }];
-        renderer
-            .render(
-                &Scene::objects(&scene).geometry_only(),
-                &roi_cam,
-                &mut target,
-            )
-            .unwrap();
+        let (roi, roi_cam) = render_roi_at(renderer, id, &pose, &mut target);
         view.extract(&target, &roi_cam, 1, &pose, 600, 200);
         edges.associate(
             term,
@@ -444,22 +434,8 @@ fn contrast_maximisation_recovers_the_velocity_of_a_moving_outline() {
         ..EventTerm::default()
     };
     let pose = truth();
-    let roi =
-        Roi::around_object(&cam, &(pose * nalgebra::Point3::origin()), 0.17, 1.2, 160).unwrap();
-    let roi_cam = cam.crop(&roi);
     let mut target = RenderTarget::new();
-    let scene = [SceneObject {
-        mesh: id,
-        pose,
-        id: 1,
-    }];
-    renderer
-        .render(
-            &Scene::objects(&scene).geometry_only(),
-            &roi_cam,
-            &mut target,
-        )
-        .unwrap();
+    let (roi, _) = render_roi_at(&mut renderer, id, &pose, &mut target);
     let mut edges = EventEdges::default();
     edges.collect(&term, &surface, &roi, target.mask(), 1, 10_000, 4_500, 400);
     let center = pose * nalgebra::Point3::origin();
