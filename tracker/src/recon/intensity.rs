@@ -155,6 +155,28 @@ impl EventSurface {
         (t != NEVER).then(|| self.base_us.unwrap_or(0) + i64::from(t))
     }
 
+    /// Row `y`'s stored times for columns `x0..x1` clipped to the sensor (empty outside it), the first column's
+    /// index, and the window `(since_us, until_us]` as stored offsets.
+    fn row_window(
+        &self,
+        y: u32,
+        x0: u32,
+        x1: u32,
+        since_us: i64,
+        until_us: i64,
+    ) -> (&[i32], usize, i32, i32) {
+        let w = self.width as usize;
+        let row: &[i32] = if y < self.height {
+            &self.last_us[y as usize * w..(y as usize + 1) * w]
+        } else {
+            &[]
+        };
+        let x1 = (x1 as usize).min(row.len());
+        let x0 = (x0 as usize).min(x1);
+        let (since, until) = (self.offset_of(since_us), self.offset_of(until_us));
+        (&row[x0..x1], x0, since, until)
+    }
+
     /// Columns `x0, x0 + step, ...` below `x1` of row `y` whose latest event lies in `(since_us, until_us]`
     /// (columns and rows outside the sensor yield nothing; `step` 0 counts as 1).
     pub fn recent_in_row(
@@ -166,23 +188,12 @@ impl EventSurface {
         since_us: i64,
         until_us: i64,
     ) -> impl Iterator<Item = u32> + '_ {
-        let w = self.width as usize;
-        let (since, until) = (self.offset_of(since_us), self.offset_of(until_us));
-        let row: &[i32] = if y < self.height {
-            &self.last_us[y as usize * w..(y as usize + 1) * w]
-        } else {
-            &[]
-        };
-        let x1 = (x1 as usize).min(row.len());
-        let x0 = (x0 as usize).min(x1);
-        // since < t <= until as one unsigned comparison; NEVER (i32::MIN) is never above `since`.
-        let lo = i64::from(since) + 1;
-        let span = (i64::from(until) - i64::from(since)).max(0) as u64;
-        row[x0..x1]
-            .iter()
+        let (span, x0, since, until) = self.row_window(y, x0, x1, since_us, until_us);
+        // NEVER (i32::MIN) is never above `since`.
+        span.iter()
             .enumerate()
             .step_by(step.max(1))
-            .filter(move |&(_, &t)| ((i64::from(t) - lo) as u64) < span)
+            .filter(move |&(_, &t)| t > since && t <= until)
             .map(move |(i, _)| (x0 + i) as u32)
     }
 
@@ -204,15 +215,7 @@ impl EventSurface {
                 .for_each(visit);
             return;
         }
-        let w = self.width as usize;
-        if y >= self.height {
-            return;
-        }
-        let row = &self.last_us[y as usize * w..(y as usize + 1) * w];
-        let (since, until) = (self.offset_of(since_us), self.offset_of(until_us));
-        let x1 = (x1 as usize).min(row.len());
-        let x0 = (x0 as usize).min(x1);
-        let span = &row[x0..x1];
+        let (span, x0, since, until) = self.row_window(y, x0, x1, since_us, until_us);
         let chunks = span.chunks_exact(8);
         let tail = chunks.remainder();
         // NEVER (i32::MIN) is never above `since`.
