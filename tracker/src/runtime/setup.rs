@@ -5,7 +5,7 @@ use super::RuntimeError;
 use super::config::{Config, ObjectConfig, SourceKind};
 use super::replay::ReplaySource;
 use super::source::{Source, SourceError};
-use crate::eval::{PoseTrack, ground_truth_objects};
+use crate::eval::{PoseTrack, ground_truth_objects, symmetries_of};
 use crate::geometry::PinholeCamera;
 use crate::mesh::{MeshLoadOptions, load_obj};
 use crate::publish::PoseSink;
@@ -116,6 +116,12 @@ fn build_eventtrack6d(
             mesh,
             first_t_us: o.first_pose.0,
             first_pose: o.first_pose.1,
+            symmetries: match &o.info {
+                Some(info) => {
+                    symmetries_of(info).map_err(|e| RuntimeError::Tracker(e.to_string()))?
+                }
+                None => Vec::new(),
+            },
         });
     }
     let config = method.configure(&TrackerConfig::default());

@@ -4,10 +4,10 @@
 use super::config::{TrackerConfig, TrackingMethod};
 use super::eventtrack::{EventTrack6d, TrackedObject, TrackingRig};
 use super::offline::track_recording;
-use crate::eval::EvalError;
 use crate::eval::PoseRecord;
 use crate::eval::bench::{Method, MethodInput};
 use crate::eval::recording_cameras;
+use crate::eval::{EvalError, symmetries_of};
 use crate::mesh::{MeshLoadOptions, load_obj};
 use crate::recon::DepthRig;
 use crate::render::{CpuRenderer, Renderer};
@@ -53,6 +53,7 @@ pub fn recording_object(
         diameter: info.diameter_m,
         first_t_us,
         first_pose,
+        symmetries: symmetries_of(info)?,
     })
 }
 

@@ -9,7 +9,7 @@ use super::redetect::{Cluster, DepthBackground};
 use super::{PoseEstimate, PoseTracker, TrackingState};
 
 use crate::geometry::{PinholeCamera, se3};
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, Symmetry};
 use crate::recon::{DepthRig, EventSurface};
 use crate::render::{RenderError, Renderer, Scene, SceneObject};
 use drivers::event::CdEvent;
@@ -58,6 +58,9 @@ pub struct TrackedObject {
     pub first_t_us: i64,
     /// First pose `T_cam_obj`, event camera frame.
     pub first_pose: Isometry3<f64>,
+    /// Shape symmetries (object frame, from `models_info.json`; empty when unknown). A rotation about a continuous
+    /// symmetry axis is invisible in shape, so the tracker keeps no spin about such an axis in its velocity.
+    pub symmetries: Vec<Symmetry>,
 }
 
 /// The cameras a tracker works with.
@@ -173,6 +176,7 @@ impl EventTrack6d {
                 aabb.max.coords,
                 o.first_pose,
                 o.first_t_us,
+                &o.symmetries,
                 &config,
             ));
             scene.push(SceneObject {

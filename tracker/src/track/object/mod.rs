@@ -6,6 +6,7 @@ mod refine;
 use super::config::TrackerConfig;
 use super::estimate::TrackingState;
 use crate::geometry::{PinholeCamera, Roi};
+use crate::mesh::Symmetry;
 use crate::recon::{CarriedDepth, DepthImage, DepthRig, EventSurface};
 use crate::refine::{
     DepthTermStats, EventEdges, IntensityEdges, ModelView, NormalEquations, apply_step,
@@ -22,6 +23,8 @@ pub(crate) struct ObjectTrack {
     pub center_obj: Vector3<f64>,
     pub aabb_min: Vector3<f64>,
     pub aabb_max: Vector3<f64>,
+    /// Continuous symmetry axes (unit, object frame): the velocity keeps no spin about them.
+    spin_axes: Vec<Vector3<f64>>,
     /// Latest estimate and its time.
     pub pose: Isometry3<f64>,
     pub t_us: i64,
@@ -69,15 +72,24 @@ impl ObjectTrack {
         aabb_max: Vector3<f64>,
         pose: Isometry3<f64>,
         t_us: i64,
+        symmetries: &[Symmetry],
         config: &TrackerConfig,
     ) -> Self {
         let n = config.roi_size as usize;
+        let spin_axes = symmetries
+            .iter()
+            .filter_map(|s| match s {
+                Symmetry::Continuous { axis, .. } => Some(axis.into_inner()),
+                Symmetry::Discrete(_) => None,
+            })
+            .collect();
         Self {
             label,
             diameter,
             center_obj: (aabb_min + aabb_max) * 0.5,
             aabb_min,
             aabb_max,
+            spin_axes,
             pose,
             t_us,
             previous: None,
@@ -250,11 +262,7 @@ impl ObjectTrack {
             self.anchor = Some((inputs.t_us, pose));
         }
         if span > 0.0 && self.state != TrackingState::Lost {
-            let c0 = self.center_at(&reference);
-            let c1 = self.center_at(&pose);
-            let dv = (c1 - c0) / span;
-            let dw = (pose.rotation * reference.rotation.inverse()).scaled_axis() / span;
-            let measured = Vector6::new(dv.x, dv.y, dv.z, dw.x, dw.y, dw.z);
+            let measured = self.observable_motion(&reference, &pose, span);
             let a = a.clamp(0.0, 1.0);
             let mut v = a * measured + (1.0 - a) * self.velocity;
             let lin = v.fixed_rows::<3>(0).norm();
@@ -273,6 +281,26 @@ impl ObjectTrack {
         self.previous = Some((self.t_us, self.pose));
         self.pose = normalise(pose);
         self.t_us = inputs.t_us;
+    }
+}
+
+impl ObjectTrack {
+    /// The velocity that carries `from` to `to` in `span_s` seconds (centre m/s, angular rad/s, camera frame),
+    /// without the spin about any continuous symmetry axis: that rotation leaves the shape unchanged, so what the
+    /// refinement reports about it is noise, and feeding it back would spin the prediction.
+    fn observable_motion(
+        &self,
+        from: &Isometry3<f64>,
+        to: &Isometry3<f64>,
+        span_s: f64,
+    ) -> Vector6<f64> {
+        let v = (self.center_at(to) - self.center_at(from)) / span_s;
+        let mut w = (to.rotation * from.rotation.inverse()).scaled_axis() / span_s;
+        for axis in &self.spin_axes {
+            let a = to.rotation * axis;
+            w -= a * a.dot(&w);
+        }
+        Vector6::new(v.x, v.y, v.z, w.x, w.y, w.z)
     }
 }
 
@@ -307,12 +335,46 @@ mod tests {
     }
 
     #[test]
+    fn velocity_keeps_no_spin_about_a_continuous_symmetry_axis() {
+        let config = TrackerConfig::default();
+        let half = Vector3::new(0.01, 0.01, 0.06);
+        let tilted = Isometry3::from_parts(
+            Translation3::new(0.0, 0.0, 0.6),
+            UnitQuaternion::from_euler_angles(0.4, -0.3, 0.2),
+        );
+        let marker = [Symmetry::Continuous {
+            axis: Vector3::z_axis(),
+            offset: Point3::origin(),
+        }];
+        let symmetric = ObjectTrack::new(1, 0.12, -half, half, tilted, 0, &marker, &config);
+        let plain = ObjectTrack::new(1, 0.12, -half, half, tilted, 0, &[], &config);
+        let turned = |axis: Vector3<f64>, angle: f64| {
+            let mut p = tilted;
+            p.rotation *= UnitQuaternion::from_scaled_axis(axis * angle);
+            p.translation.vector.x += 0.01;
+            p
+        };
+        let span = 0.1;
+        // A turn about the object's own axis (its symmetry): only the translation is motion.
+        let spun = turned(Vector3::z(), 0.3);
+        let w = symmetric.observable_motion(&tilted, &spun, span);
+        assert!((w[0] - 0.1).abs() < 1e-9, "{w}");
+        assert!(w.fixed_rows::<3>(3).norm() < 1e-9, "{w}");
+        let w = plain.observable_motion(&tilted, &spun, span);
+        assert!((w.fixed_rows::<3>(3).norm() - 3.0).abs() < 1e-9, "{w}");
+        // A turn across the axis is seen in the shape and kept.
+        let tipped = turned(Vector3::x(), 0.3);
+        let w = symmetric.observable_motion(&tilted, &tipped, span);
+        assert!((w.fixed_rows::<3>(3).norm() - 3.0).abs() < 1e-9, "{w}");
+    }
+
+    #[test]
     fn roi_at_a_depth_exposure_widens_to_the_extrapolated_start_only_when_asked() {
         let camera = PinholeCamera::new(600.0, 600.0, 639.5, 359.5, 1280, 720).unwrap();
         let mut config = TrackerConfig::default();
         let at = |x: f64| Isometry3::translation(x, 0.0, 0.6);
         let half = Vector3::new(0.05, 0.05, 0.05);
-        let mut track = ObjectTrack::new(1, 0.1, -half, half, at(0.0), 0, &config);
+        let mut track = ObjectTrack::new(1, 0.1, -half, half, at(0.0), 0, &[], &config);
         // The previous depth pose 33 ms ago at x = 0, moving at 3 m/s along x: the extrapolated start is
         // 10 cm (one diameter) away from a prediction that stayed at x = 0.
         track.anchor = Some((0, at(0.0)));
