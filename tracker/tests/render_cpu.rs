@@ -10,7 +10,7 @@ use tracker::geometry::{PinholeCamera, Roi};
 use tracker::mesh::Mesh;
 use tracker::render::{
     BackgroundMesh, CpuRenderer, Lighting, MASK_BACKGROUND, MASK_EMPTY, MeshId, RenderError,
-    RenderTarget, Renderer, Scene, SceneObject,
+    RenderTarget, Renderer, Scene, SceneObject, surface_grid_stride,
 };
 
 fn at(x: f64, y: f64, z: f64) -> Isometry3<f64> {
@@ -478,6 +478,86 @@ fn geometry_only_render_keeps_geometry_and_skips_intensity() {
     );
     assert!(shaded.intensity().iter().any(|&i| i > 0.0));
     assert!(geometry.intensity().iter().all(|&i| i == 0.0));
+}
+
+#[test]
+fn surface_grid_normals_match_the_full_render_on_each_objects_grid() {
+    let (mut r, ids) = renderer_with(vec![sphere(0.08, 20, 40), cube(0.1), square(2.0, None)]);
+    // The cube partly hides the sphere: each object's grid pitch comes from its own visible pixels.
+    let objects = [
+        SceneObject {
+            mesh: ids[0],
+            pose: at(0.03, 0.0, 0.5),
+            id: 1,
+        },
+        SceneObject {
+            mesh: ids[1],
+            pose: at(-0.05, 0.02, 0.4),
+            id: 2,
+        },
+    ];
+    let background = [BackgroundMesh {
+        mesh: ids[2],
+        pose: at(0.0, 0.0, 1.0),
+    }];
+    let geometry = Scene::objects(&objects)
+        .with_background(&background)
+        .geometry_only();
+    let cam = vga();
+    let max_samples = 300;
+    let (mut full, mut sparse) = (RenderTarget::new(), RenderTarget::new());
+    r.render(&geometry, &cam, &mut full).unwrap();
+    r.render(
+        &geometry.normals_on_surface_grid(max_samples),
+        &cam,
+        &mut sparse,
+    )
+    .unwrap();
+    assert_eq!(full.mask(), sparse.mask());
+    let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(full.depth()), bits(sparse.depth()));
+    let w = full.width() as usize;
+    let mut skipped = 0;
+    for id in [1u16, 2] {
+        let visible = full.mask().iter().filter(|&&m| m == id).count();
+        let stride = surface_grid_stride(visible, max_samples);
+        assert!(
+            stride > 1,
+            "object {id}: {visible} pixels give pitch {stride}"
+        );
+        let mut on_grid = 0;
+        for (i, &m) in full.mask().iter().enumerate() {
+            if m != id {
+                continue;
+            }
+            let (u, v) = (i % w, i / w);
+            if u % stride == 0 && v % stride == 0 {
+                on_grid += 1;
+                assert_eq!(
+                    full.normals()[i].map(f32::to_bits),
+                    sparse.normals()[i].map(f32::to_bits),
+                    "object {id} at ({u}, {v})"
+                );
+            } else if sparse.normals()[i] == [0.0; 3] {
+                skipped += 1;
+            }
+        }
+        assert!(on_grid > 0);
+    }
+    assert!(skipped > 0, "the sparse render shaded every normal");
+    for (i, &m) in full.mask().iter().enumerate() {
+        if m == MASK_BACKGROUND {
+            assert_eq!(full.normals()[i], sparse.normals()[i]);
+        }
+    }
+    // Shading intensity needs every normal, so the request is ignored then.
+    let shaded = Scene::objects(&objects).with_background(&background);
+    let (mut a, mut b) = (RenderTarget::new(), RenderTarget::new());
+    r.render(&shaded, &cam, &mut a).unwrap();
+    r.render(&shaded.normals_on_surface_grid(max_samples), &cam, &mut b)
+        .unwrap();
+    assert_eq!(a.normals(), b.normals());
+    assert_eq!(bits(a.intensity()), bits(b.intensity()));
 }
 
 #[test]

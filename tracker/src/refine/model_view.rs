@@ -3,7 +3,7 @@
 //! move them with the current pose without re-rendering.
 
 use crate::geometry::PinholeCamera;
-use crate::render::{MASK_BACKGROUND, MASK_EMPTY, RenderTarget};
+use crate::render::{MASK_BACKGROUND, MASK_EMPTY, RenderTarget, surface_grid_stride};
 use nalgebra::{Isometry3, Point2, Point3, Vector3};
 
 /// A visible surface point of the model.
@@ -91,7 +91,7 @@ impl ModelView {
             camera.unproject(&Point2::new(u as f64, v as f64), f64::from(depth[i]))
         };
         // Surface samples on a grid whose pitch keeps them under `max_surface`.
-        let stride = ((visible as f64 / max_surface as f64).sqrt().ceil() as usize).max(1);
+        let stride = surface_grid_stride(visible, max_surface);
         'rows: for v in (0..h).step_by(stride) {
             for u in (0..w).step_by(stride) {
                 if self.surface.len() >= max_surface {

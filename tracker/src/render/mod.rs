@@ -18,7 +18,10 @@ mod target;
 pub use cpu::CpuRenderer;
 #[cfg(feature = "gpu")]
 pub use gpu::GpuRenderer;
-pub use scene::{BackgroundMesh, Lighting, MASK_BACKGROUND, MASK_EMPTY, Scene, SceneObject};
+pub use scene::{
+    BackgroundMesh, Lighting, MASK_BACKGROUND, MASK_EMPTY, NormalCoverage, Scene, SceneObject,
+    surface_grid_stride,
+};
 pub use target::RenderTarget;
 
 use crate::geometry::{CameraError, PinholeCamera, Roi};

@@ -67,6 +67,29 @@ pub struct Scene<'a> {
     /// Whether the intensity channel is wanted. When `false` the backends skip texturing and lighting and leave
     /// intensity at 0; depth, normals and mask are unaffected.
     pub shade_intensity: bool,
+    /// Which object pixels need a surface normal.
+    pub normals: NormalCoverage,
+}
+
+/// Which object pixels of a render get a surface normal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NormalCoverage {
+    /// Every rendered pixel.
+    Everywhere,
+    /// At least the pixels of each object's surface sampling grid: `u` and `v` both multiples of
+    /// [`surface_grid_stride`]`(visible, max_samples)`, where `visible` is the number of pixels of that object in the
+    /// render. Other pixels may hold a zero normal. Only honoured when intensity is not shaded (shading needs every
+    /// normal); a backend may always write more normals than asked.
+    SurfaceGrid {
+        /// Most surface samples the caller takes per object.
+        max_samples: usize,
+    },
+}
+
+/// Pitch (pixels) of the grid on which refinement samples an object's surface: the smallest that keeps the samples
+/// of `visible` object pixels under about `max_samples`. At least 1.
+pub fn surface_grid_stride(visible: usize, max_samples: usize) -> usize {
+    ((visible as f64 / max_samples.max(1) as f64).sqrt().ceil() as usize).max(1)
 }
 
 impl<'a> Scene<'a> {
@@ -81,6 +104,7 @@ impl<'a> Scene<'a> {
             lighting: Lighting::default(),
             near: Self::DEFAULT_NEAR,
             shade_intensity: true,
+            normals: NormalCoverage::Everywhere,
         }
     }
 
@@ -88,6 +112,15 @@ impl<'a> Scene<'a> {
     pub fn geometry_only(self) -> Self {
         Self {
             shade_intensity: false,
+            ..self
+        }
+    }
+
+    /// The same scene with normals only where surface sampling on a grid of at most `max_samples` points per object
+    /// reads them (see [`NormalCoverage::SurfaceGrid`]).
+    pub fn normals_on_surface_grid(self, max_samples: usize) -> Self {
+        Self {
+            normals: NormalCoverage::SurfaceGrid { max_samples },
             ..self
         }
     }

@@ -4,8 +4,8 @@ pub(super) mod prepared;
 mod raster;
 
 use super::{
-    MASK_BACKGROUND, MAX_PIXELS, MeshId, RenderError, RenderTarget, Renderer, Scene,
-    scene::MASK_EMPTY,
+    MASK_BACKGROUND, MAX_PIXELS, MeshId, NormalCoverage, RenderError, RenderTarget, Renderer,
+    Scene, scene::MASK_EMPTY, surface_grid_stride,
 };
 use crate::geometry::PinholeCamera;
 use crate::geometry::se3::to_glam_affine;
@@ -44,6 +44,8 @@ pub struct CpuRenderer {
     codes: Vec<u8>,
     screen: Vec<RasterVertex>,
     instances: Vec<Instance>,
+    /// Per instance: visible pixels, then the pitch of its normal grid (pixels; 1 = every pixel).
+    normal_stride: Vec<usize>,
 }
 
 impl CpuRenderer {
@@ -142,6 +144,31 @@ impl CpuRenderer {
         }
     }
 
+    /// Sets each instance's normal grid pitch for `coverage` (1 everywhere when intensity is shaded).
+    fn plan_normals(&mut self, scene: &Scene<'_>) {
+        self.normal_stride.clear();
+        self.normal_stride.resize(self.instances.len(), 0);
+        let max_samples = match scene.normals {
+            NormalCoverage::SurfaceGrid { max_samples } if !scene.shade_intensity => max_samples,
+            _ => {
+                self.normal_stride.fill(1);
+                return;
+            }
+        };
+        for &inst in &self.vis.instance {
+            if let Some(count) = self.normal_stride.get_mut(usize::from(inst)) {
+                *count += 1;
+            }
+        }
+        for (count, instance) in self.normal_stride.iter_mut().zip(&self.instances) {
+            *count = if instance.mask == MASK_BACKGROUND {
+                1
+            } else {
+                surface_grid_stride(*count, max_samples)
+            };
+        }
+    }
+
     /// Shading pass: resolves every visible pixel into the target.
     fn shade(&self, scene: &Scene<'_>, camera: &PinholeCamera, target: &mut RenderTarget) {
         let l = &scene.lighting;
@@ -168,6 +195,12 @@ impl CpuRenderer {
                 }
                 let idx = v * width + u;
                 let info = &self.instances[usize::from(inst)];
+                target.depth[idx] = 1.0 / self.vis.inv_z[idx];
+                target.mask[idx] = info.mask;
+                let stride = self.normal_stride[usize::from(inst)];
+                if stride > 1 && (u % stride != 0 || v % stride != 0) {
+                    continue;
+                }
                 let mesh = &self.meshes[info.mesh];
                 let tri = self.vis.triangle[idx] as usize;
                 let [b1, b2] = self.vis.bary[idx];
@@ -185,9 +218,7 @@ impl CpuRenderer {
                 } else if n.dot(ray) > 0.0 {
                     n = -n;
                 }
-                target.depth[idx] = 1.0 / self.vis.inv_z[idx];
                 target.normals[idx] = n.to_array();
-                target.mask[idx] = info.mask;
                 if !scene.shade_intensity {
                     continue;
                 }
@@ -255,6 +286,7 @@ impl Renderer for CpuRenderer {
             // Bounded by the TooManyInstances check above.
             self.draw_instance(&proj, instance as u16, pose);
         }
+        self.plan_normals(scene);
         self.shade(scene, camera, target);
         Ok(())
     }

@@ -49,6 +49,7 @@ impl EventTrack6d {
             let predicted_centre = o.center_at(&predicted);
             let diameter = o.diameter;
             let center_obj = o.center_obj;
+            let max_surface = self.config.max_surface_points;
             // Samples the object's two largest box extents cover at 1 m.
             let size = o.aabb_max - o.aabb_min;
             // The object's longest box axis, object frame.
@@ -66,7 +67,9 @@ impl EventTrack6d {
                 let roi = o.update_roi(&self.rig.event_camera, &self.config, t_us, false)?;
                 let camera = &self.rig.event_camera;
                 let mut render = |scene: &[SceneObject], target: &mut RenderTarget| {
-                    let scene = Scene::objects(scene).geometry_only();
+                    let scene = Scene::objects(scene)
+                        .geometry_only()
+                        .normals_on_surface_grid(max_surface);
                     let ok = self
                         .renderer
                         .render_roi(&scene, camera, &roi, target)

@@ -330,8 +330,10 @@ impl PoseTracker for EventTrack6d {
             camera: &self.rig.event_camera,
             depth_rig: &self.rig.depth,
         };
-        // The tracker compares geometry only: no texturing.
-        let scene = Scene::objects(&self.scene).geometry_only();
+        // The tracker compares geometry only (no texturing), and reads normals only on the surface grid.
+        let scene = Scene::objects(&self.scene)
+            .geometry_only()
+            .normals_on_surface_grid(self.config.max_surface_points);
         for o in &mut self.objects {
             if t_us < o.t_us {
                 continue;
