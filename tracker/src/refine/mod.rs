@@ -48,9 +48,20 @@ impl NormalEquations {
     #[inline]
     pub fn add_point(&mut self, grad: &Vector3<f64>, p_minus_c: &Vector3<f64>, r: f64, w: f64) {
         let rot = p_minus_c.cross(grad);
-        let j = Vector6::new(grad.x, grad.y, grad.z, rot.x, rot.y, rot.z);
-        self.h += (w * j) * j.transpose();
-        self.g += (w * r) * j;
+        let j = [grad.x, grad.y, grad.z, rot.x, rot.y, rot.z];
+        let wj = j.map(|x| w * x);
+        // Column by column, each entry gets exactly `(w j_r) j_c`: the same sums as `(w j) j^T` without the
+        // temporary matrix.
+        for (c, column) in self.h.column_iter_mut().enumerate() {
+            let jc = j[c];
+            for (h, wjr) in column.into_iter().zip(wj) {
+                *h += wjr * jc;
+            }
+        }
+        let wr = w * r;
+        for (g, jr) in self.g.iter_mut().zip(j) {
+            *g += wr * jr;
+        }
         self.cost += w * r * r;
         self.count += 1;
     }
