@@ -7,14 +7,47 @@ use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use nalgebra::{Isometry3, Translation3};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::render::CpuRenderer;
+use tracker::geometry::PinholeCamera;
+use tracker::mesh::Mesh;
+use tracker::render::{CpuRenderer, MeshId, RenderError, RenderTarget, Renderer, Scene};
 use tracker::track::{
     EventTrack6d, TrackerConfig, TrackingState, recording_object, recording_rig, track_recording,
 };
 
-/// Translation error (metres) and state at every tick, and the re-detection count.
-fn run(recording: &Recording, config: TrackerConfig) -> (Vec<(f64, TrackingState)>, u64) {
+/// The CPU renderer, counting its renders.
+struct CountingRenderer {
+    inner: CpuRenderer,
+    renders: Arc<AtomicUsize>,
+}
+
+impl Renderer for CountingRenderer {
+    fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
+        self.inner.add_mesh(mesh)
+    }
+
+    fn render(
+        &mut self,
+        scene: &Scene<'_>,
+        camera: &PinholeCamera,
+        target: &mut RenderTarget,
+    ) -> Result<(), RenderError> {
+        self.renders.fetch_add(1, Ordering::Relaxed);
+        self.inner.render(scene, camera, target)
+    }
+}
+
+/// What a run did: translation error (metres) and state at every tick, re-detections, and the most renders
+/// one tick made.
+struct Run {
+    errors: Vec<(f64, TrackingState)>,
+    redetections: u64,
+    max_renders_per_tick: usize,
+}
+
+fn run(recording: &Recording, config: TrackerConfig) -> Run {
     let gt = recording.ground_truth.clone().expect("ground truth");
     let truth = PoseTrack::from_samples(&gt, "mug");
     let ticks = recording_ticks(recording).expect("ticks");
@@ -26,9 +59,15 @@ fn run(recording: &Recording, config: TrackerConfig) -> (Vec<(f64, TrackingState
     let mut start = object.clone();
     start.first_pose = Translation3::new(shift, 0.0, 0.0) * pose;
     let rig = recording_rig(recording).expect("rig");
+    let renders = Arc::new(AtomicUsize::new(0));
+    let renderer = CountingRenderer {
+        inner: CpuRenderer::new(),
+        renders: renders.clone(),
+    };
     let mut tracker =
-        EventTrack6d::new(config, rig, vec![start], Box::new(CpuRenderer::new())).expect("tracker");
+        EventTrack6d::new(config, rig, vec![start], Box::new(renderer)).expect("tracker");
     let mut errors = Vec::new();
+    let mut max_renders_per_tick = 0;
     track_recording(
         recording,
         &mut tracker,
@@ -38,11 +77,16 @@ fn run(recording: &Recording, config: TrackerConfig) -> (Vec<(f64, TrackingState
             let e = &estimates[0];
             let error = (e.pose.translation.vector - truth_now.translation.vector).norm();
             errors.push((error, e.state));
+            max_renders_per_tick = max_renders_per_tick.max(renders.swap(0, Ordering::Relaxed));
         },
         |_| {},
     )
     .expect("replay");
-    (errors, tracker.counters().redetections)
+    Run {
+        errors,
+        redetections: tracker.counters().redetections,
+        max_renders_per_tick,
+    }
 }
 
 /// Ticks 12 to 40 (0.1 to 0.33 s): the object is still out of the frozen ROI's reach by itself.
@@ -65,7 +109,11 @@ fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
     // its ROI: it is still far off over the early ticks.
     let mut off = TrackerConfig::default();
     off.redetect.enabled = false;
-    let (errors, redetections) = run(&recording, off);
+    let Run {
+        errors,
+        redetections,
+        ..
+    } = run(&recording, off);
     assert_eq!(redetections, 0);
     let nearest = errors[EARLY]
         .iter()
@@ -76,9 +124,20 @@ fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
         "without re-detection the tracker came back early ({nearest:.3} m)"
     );
 
-    // With it, the object is found within those ticks and tracked from then on.
-    let (errors, redetections) = run(&recording, TrackerConfig::default());
+    // With it, the object is found within those ticks and tracked from then on, and no tick checks more than
+    // `places_per_tick` places (two renders each, besides the tick's own).
+    let config = TrackerConfig::default();
+    let bound = 1 + 2 * config.redetect.places_per_tick;
+    let Run {
+        errors,
+        redetections,
+        max_renders_per_tick,
+    } = run(&recording, config);
     assert!(redetections >= 1, "no re-detection");
+    assert!(
+        max_renders_per_tick <= bound,
+        "a tick rendered {max_renders_per_tick} times (bound {bound})"
+    );
     let after = &errors[*EARLY.end()..];
     let worst = after.iter().map(|(e, _)| *e).fold(0.0, f64::max);
     assert!(
@@ -89,5 +148,32 @@ fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
     assert!(
         after.iter().all(|(_, s)| *s != TrackingState::Lost),
         "lost after re-detection"
+    );
+}
+
+#[test]
+fn a_search_checks_all_its_places_in_one_tick_only_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = GenerateConfig::new(
+        ObjectSource::Library(ObjectKind::Mug),
+        MotionProfile::Translation,
+        SpeedLevel::Moderate,
+        0.5,
+        11,
+    );
+    generate(&cfg, dir.path(), |_| {}).expect("generating the recording");
+    let recording = Recording::open(dir.path()).expect("recording");
+    let spread = TrackerConfig::default();
+    let bound = 1 + 2 * spread.redetect.places_per_tick;
+    let mut at_once = spread.clone();
+    at_once.redetect.places_per_tick = 0;
+    let spread = run(&recording, spread);
+    let at_once = run(&recording, at_once);
+    assert!(spread.redetections >= 1 && at_once.redetections >= 1);
+    assert!(spread.max_renders_per_tick <= bound);
+    assert!(
+        at_once.max_renders_per_tick > bound,
+        "the whole search fit in {} renders: the bound is not exercised",
+        at_once.max_renders_per_tick
     );
 }

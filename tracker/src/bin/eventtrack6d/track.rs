@@ -203,6 +203,12 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             counters.redetections
         );
     }
+    if counters.redetect_places_dropped > 0 {
+        eprintln!(
+            "{} re-detection places left unchecked: a newer depth frame arrived first ([redetect] places_per_tick)",
+            counters.redetect_places_dropped
+        );
+    }
     if counters.render_errors > 0 || counters.depth_frames_unused > 0 {
         eprintln!(
             "warning: {} render errors, {} depth frames unused",

@@ -1,23 +1,50 @@
-//! The search for objects the tracker fell off, at a depth frame: object-sized foreground clusters of the
-//! depth image, each tried with a depth-only refinement (see [`crate::track::redetect`]).
+//! The search for objects the tracker fell off: planned at a depth frame from the object-sized foreground
+//! clusters of the depth image (see [`crate::track::redetect`]), then carried out a few places per tick, each
+//! place tried with a depth-only refinement against that frame.
 
 use super::EventTrack6d;
 use crate::render::{RenderTarget, Scene, SceneObject};
 use crate::track::TrackingState;
+use crate::track::config::DepthUse;
 use crate::track::object::TickInputs;
 use crate::track::redetect::cluster_centres;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
+/// One place to check for one object.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PendingPlace {
+    object: usize,
+    /// Start of the depth-only refinement, `T_cam_obj`.
+    start: Isometry3<f64>,
+    /// Whether this is where the tracker predicted the object (the score to beat).
+    predicted: bool,
+}
+
+/// One object's search in progress.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Search {
+    /// Score at the prediction.
+    here: f64,
+    /// Best other place so far: score and refined pose.
+    best: Option<(f64, Isometry3<f64>)>,
+    /// Places still pending.
+    remaining: usize,
+}
+
 impl EventTrack6d {
-    /// At a depth frame: every object that is not `tracking` is checked, on depth alone, where it is predicted
-    /// and at the object-sized clusters of foreground (with the predicted orientation and with its longest axis
-    /// along the cluster's); it moves to the best place if that scores clearly better than the prediction.
-    pub(super) fn redetect(&mut self, t_us: i64, dt_s: f64) {
+    /// At a depth frame: plans the search for every object that is not `tracking`: where it is predicted, then
+    /// the object-sized clusters of foreground (with the predicted orientation and with its longest axis along
+    /// the cluster's). Places left over from the previous frame are dropped and counted.
+    pub(super) fn plan_redetection(&mut self, t_us: i64) {
         let cfg = self.config.redetect;
         let r = &mut self.redetection;
+        self.counters.redetect_places_dropped += r.pending.len() as u64;
+        r.pending.clear();
+        r.frame = Some((self.depth.index, t_us));
         let mut foreground_ready = false;
         for k in 0..self.objects.len() {
             let o = &self.objects[k];
+            r.searches[k] = Search::default();
             if o.state == TrackingState::Tracking || t_us < o.t_us {
                 continue;
             }
@@ -47,9 +74,6 @@ impl EventTrack6d {
             }
             let predicted = o.predicted;
             let predicted_centre = o.center_at(&predicted);
-            let diameter = o.diameter;
-            let center_obj = o.center_obj;
-            let max_surface = self.config.max_surface_points;
             // Samples the object's two largest box extents cover at 1 m.
             let size = o.aabb_max - o.aabb_min;
             // The object's longest box axis, object frame.
@@ -60,52 +84,15 @@ impl EventTrack6d {
                 * extent[0]
                 * extent[1]
                 * r.background.samples_per_m2_at_1m(&self.rig.depth);
-            let mut probe = |start: Isometry3<f64>| {
-                let o = &mut self.objects[k];
-                o.predicted = start;
-                self.scene[k].pose = start;
-                let roi = o.update_roi(&self.rig.event_camera, &self.config, t_us, false)?;
-                let camera = &self.rig.event_camera;
-                let mut render = |scene: &[SceneObject], target: &mut RenderTarget| {
-                    let scene = Scene::objects(scene)
-                        .geometry_only()
-                        .normals_on_surface_grid(max_surface);
-                    let ok = self
-                        .renderer
-                        .render_roi(&scene, camera, &roi, target)
-                        .is_ok();
-                    self.counters.render_errors += u64::from(!ok);
-                    ok
-                };
-                if !render(&self.scene, &mut o.target) {
-                    return None;
-                }
-                let inputs = TickInputs {
-                    t_us,
-                    dt_s,
-                    depth: Some(&self.depth),
-                    surface: &self.surface,
-                    camera: &self.rig.event_camera,
-                    depth_rig: &self.rig.depth,
-                };
-                let (fit, pose) = o.probe_depth(&inputs, &self.config)?;
-                // Ranked by the silhouette at the refined pose, in the same ROI.
-                self.scene[k].pose = pose;
-                if !render(&self.scene, &mut o.target) {
-                    return None;
-                }
-                // Both directions: model points the depth confirms, and depth at the object's range the model
-                // explains (a pose showing a small part of the object can fit that part perfectly).
-                Some((
-                    fit * o.silhouette_agreement(&pose, &self.config).sqrt(),
-                    pose,
-                ))
-            };
-            let here = probe(predicted).map_or(0.0, |(fit, _)| fit);
-            let mut best: Option<(f64, Isometry3<f64>)> = None;
+            let before = r.pending.len();
+            r.pending.push_back(PendingPlace {
+                object: k,
+                start: predicted,
+                predicted: true,
+            });
             for cluster in &r.centres {
                 let centre = cluster.centre;
-                if (centre - predicted_centre).norm() < 0.25 * diameter
+                if (centre - predicted_centre).norm() < 0.25 * o.diameter
                     || (cluster.support as f64)
                         < (min_support / (centre.z * centre.z).max(1e-6)).max(8.0)
                 {
@@ -123,26 +110,128 @@ impl EventTrack6d {
                     .map(|q| q * predicted.rotation)
                     .filter(|_| current.angle(&target) > 15f64.to_radians());
                 for rotation in [Some(predicted.rotation), aligned].into_iter().flatten() {
-                    let start = Isometry3::from_parts(
-                        Translation3::from(centre.coords - rotation * center_obj),
-                        rotation,
-                    );
-                    if let Some((fit, pose)) = probe(start)
-                        && best.is_none_or(|(b, _)| fit > b)
-                    {
-                        best = Some((fit, pose));
+                    r.pending.push_back(PendingPlace {
+                        object: k,
+                        start: Isometry3::from_parts(
+                            Translation3::from(centre.coords - rotation * o.center_obj),
+                            rotation,
+                        ),
+                        predicted: false,
+                    });
+                }
+            }
+            r.searches[k].remaining = r.pending.len() - before;
+        }
+    }
+
+    /// Checks up to `places_per_tick` pending places (all of them when it is 0, or for a tracker that refines only
+    /// at depth frames) against the depth frame they were
+    /// planned on; an object whose search is complete moves to its best place if that scores clearly better
+    /// than the prediction did. A search is abandoned when the object is `tracking` again.
+    pub(super) fn continue_redetection(&mut self, dt_s: f64) {
+        let cfg = self.config.redetect;
+        // A tracker that refines only at depth frames (`depth30`) has no ticks in between to spread over.
+        let budget = if cfg.places_per_tick == 0 || self.config.depth == DepthUse::DepthFramesOnly {
+            usize::MAX
+        } else {
+            cfg.places_per_tick
+        };
+        let Some((frame_index, frame_t_us)) = self.redetection.frame else {
+            return;
+        };
+        if frame_index != self.depth.index {
+            let r = &mut self.redetection;
+            self.counters.redetect_places_dropped += r.pending.len() as u64;
+            r.pending.clear();
+            return;
+        }
+        let mut checked = 0;
+        while checked < budget {
+            let Some(place) = self.redetection.pending.pop_front() else {
+                break;
+            };
+            let k = place.object;
+            let search = &mut self.redetection.searches[k];
+            search.remaining -= 1;
+            if self.objects[k].state == TrackingState::Tracking {
+                continue;
+            }
+            checked += 1;
+            let result = self.check_place(k, place.start, frame_t_us, dt_s);
+            let search = &mut self.redetection.searches[k];
+            if place.predicted {
+                search.here = result.map_or(0.0, |(score, _)| score);
+            } else if let Some((score, pose)) = result
+                && search.best.is_none_or(|(b, _)| score > b)
+            {
+                search.best = Some((score, pose));
+            }
+            if search.remaining == 0
+                && let Some((score, pose)) = search.best
+                && score >= cfg.min_score
+                && score > search.here + cfg.margin
+            {
+                self.objects[k].relocate(pose);
+                self.scene[k].pose = self.objects[k].predicted;
+            }
+        }
+    }
+
+    /// Object `k` refined on the depth frame of `frame_t_us` alone from `start`, rendered in its own ROI with the
+    /// other objects where they are predicted: the score (fraction of model points the depth confirms x sqrt of
+    /// the silhouette's agreement with the depth at the object's range) and the refined pose. The object's
+    /// prediction and scene pose are left as they were.
+    fn check_place(
+        &mut self,
+        k: usize,
+        start: Isometry3<f64>,
+        frame_t_us: i64,
+        dt_s: f64,
+    ) -> Option<(f64, Isometry3<f64>)> {
+        let o = &mut self.objects[k];
+        let predicted = o.predicted;
+        o.predicted = start;
+        self.scene[k].pose = start;
+        let max_surface = self.config.max_surface_points;
+        let camera = &self.rig.event_camera;
+        let mut result = None;
+        if let Some(roi) = o.update_roi(camera, &self.config, frame_t_us, false) {
+            let mut render = |scene: &[SceneObject], target: &mut RenderTarget| {
+                let scene = Scene::objects(scene)
+                    .geometry_only()
+                    .normals_on_surface_grid(max_surface);
+                let ok = self
+                    .renderer
+                    .render_roi(&scene, camera, &roi, target)
+                    .is_ok();
+                self.counters.render_errors += u64::from(!ok);
+                ok
+            };
+            if render(&self.scene, &mut o.target) {
+                let inputs = TickInputs {
+                    t_us: frame_t_us,
+                    dt_s,
+                    depth: Some(&self.depth),
+                    surface: &self.surface,
+                    camera,
+                    depth_rig: &self.rig.depth,
+                };
+                if let Some((fit, pose)) = o.probe_depth(&inputs, &self.config) {
+                    // Ranked by the silhouette at the refined pose, in the same ROI.
+                    self.scene[k].pose = pose;
+                    if render(&self.scene, &mut o.target) {
+                        // Both directions: model points the depth confirms, and depth at the object's range the
+                        // model explains (a pose showing a small part of the object can fit that part perfectly).
+                        result = Some((
+                            fit * o.silhouette_agreement(&pose, &self.config).sqrt(),
+                            pose,
+                        ));
                     }
                 }
             }
-            let o = &mut self.objects[k];
-            o.predicted = predicted;
-            if let Some((fit, pose)) = best
-                && fit >= cfg.min_score
-                && fit > here + cfg.margin
-            {
-                o.relocate(pose);
-            }
-            self.scene[k].pose = o.predicted;
         }
+        o.predicted = predicted;
+        self.scene[k].pose = predicted;
+        result
     }
 }

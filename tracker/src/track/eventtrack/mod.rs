@@ -7,6 +7,7 @@ use super::config::{DepthUse, TrackerConfig};
 use super::object::{ObjectTrack, TickInputs};
 use super::redetect::{Cluster, DepthBackground};
 use super::{PoseEstimate, PoseTracker, TrackingState};
+use lost_search::{PendingPlace, Search};
 
 use crate::geometry::{PinholeCamera, se3};
 use crate::mesh::{Mesh, Symmetry};
@@ -16,6 +17,7 @@ use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
 use nalgebra::{Isometry3, Point3, Vector3};
+use std::collections::VecDeque;
 use std::sync::Arc;
 
 /// Why a tracker could not be built.
@@ -87,6 +89,8 @@ pub struct TrackerCounters {
     pub depth_fallbacks: u64,
     /// Depth frames at which re-detection moved an object that was not `tracking` (all objects).
     pub redetections: u64,
+    /// Re-detection places left unchecked because a newer depth frame replaced the one they were planned on.
+    pub redetect_places_dropped: u64,
 }
 
 /// The EventTrack6D tracker (and, through [`super::TrackingMethod`], its baselines).
@@ -111,6 +115,11 @@ struct Redetection {
     foreground: Vec<Point3<f64>>,
     seeds: Vec<(usize, Point3<f64>)>,
     centres: Vec<Cluster>,
+    /// Places still to check, in order, against the depth frame `frame` (index, tick time in microseconds).
+    pending: VecDeque<PendingPlace>,
+    frame: Option<(u64, i64)>,
+    /// Per object: the search's results so far.
+    searches: Vec<Search>,
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -186,6 +195,7 @@ impl EventTrack6d {
             });
             names.push(o.name);
         }
+        let objects_len = tracks.len();
         let cam = rig.event_camera;
         let depth_cam = rig.depth.camera;
         let cell = config.redetect.cell_px.max(1);
@@ -196,6 +206,9 @@ impl EventTrack6d {
             ),
             seeds: Vec::with_capacity(128),
             centres: Vec::with_capacity(config.redetect.candidates),
+            pending: VecDeque::with_capacity(objects_len * (1 + 2 * config.redetect.candidates)),
+            frame: None,
+            searches: vec![Search::default(); objects_len],
         };
         Ok(Self {
             surface: EventSurface::new(cam.width, cam.height, config.intensity),
@@ -318,9 +331,12 @@ impl PoseTracker for EventTrack6d {
             s.pose = o.predicted;
         }
         let refines = self.refines(depth_now);
-        if depth_now && refines && self.config.redetect.enabled {
-            self.redetection.background.update(&self.depth);
-            self.redetect(t_us, dt_s);
+        if refines && self.config.redetect.enabled {
+            if depth_now {
+                self.redetection.background.update(&self.depth);
+                self.plan_redetection(t_us);
+            }
+            self.continue_redetection(dt_s);
         }
         let inputs = TickInputs {
             t_us,
