@@ -108,6 +108,23 @@ fn bench_bad_inputs() {
         ],
         "translation noise (mm) `a`",
     );
+    // Tracker parameters are checked before any suite is generated or read.
+    let params = dir.path().join("params.toml");
+    std::fs::write(&params, "[redetect]\nplaces_per_tik = 1\n").unwrap();
+    fails_with(
+        &[
+            "bench",
+            "--suite",
+            "smoke",
+            "--methods",
+            "eventtrack6d",
+            "--out",
+            out,
+            "--params",
+            params.to_str().unwrap(),
+        ],
+        "places_per_tik",
+    );
     let nowhere = Path::new("does/not/exist");
     fails_with(
         &[

@@ -125,6 +125,23 @@ impl Method for GtNoiseMethod {
     }
 }
 
+/// The tracker method `spec` names (`NAME` or `NAME@DEG:CM`) on `base` parameters; `None` when it names none.
+fn tracker_method_from_spec(
+    spec: &str,
+    base: &crate::track::TrackerConfig,
+) -> Option<Result<crate::track::TrackerMethod, String>> {
+    if let Some(method) = crate::track::TrackingMethod::from_name(spec) {
+        return Some(Ok(crate::track::TrackerMethod::new(method, base)));
+    }
+    let (name, noise) = spec.split_once('@')?;
+    let method = crate::track::TrackingMethod::from_name(name)?;
+    Some(
+        crate::track::InitNoise::parse(&noise.replace(':', ","), 1)
+            .map(|noise| crate::track::TrackerMethod::new(method, base).with_init_noise(noise))
+            .map_err(|e| format!("method `{spec}`: {e}")),
+    )
+}
+
 fn record(t_us: i64, object: &str, pose: Isometry3<f64>, quality: f64) -> PoseRecord {
     PoseRecord {
         t_us,
@@ -136,24 +153,20 @@ fn record(t_us: i64, object: &str, pose: Isometry3<f64>, quality: f64) -> PoseRe
 }
 
 /// Builds a method from its spec: a tracker method (`eventtrack6d`, `depth30`, `events-only`, optionally
-/// `NAME@DEG:CM` with a perturbed first pose), `static`, `gt-noise` (5 mm, 2 deg) or `gt-noise:MM:DEG`.
+/// `NAME@DEG:CM` with a perturbed first pose), `static`, `gt-noise` (5 mm, 2 deg) or `gt-noise:MM:DEG`. Tracker
+/// methods use the default parameters.
 pub fn method_from_spec(spec: &str) -> Result<Box<dyn Method>, String> {
+    method_from_spec_with(spec, &crate::track::TrackerConfig::default())
+}
+
+/// [`method_from_spec`] with tracker methods built on `base` parameters (each method's preset applied on top).
+pub fn method_from_spec_with(
+    spec: &str,
+    base: &crate::track::TrackerConfig,
+) -> Result<Box<dyn Method>, String> {
     let spec = spec.trim();
-    if let Some(method) = crate::track::TrackingMethod::from_name(spec) {
-        return Ok(Box::new(crate::track::TrackerMethod::new(
-            method,
-            &crate::track::TrackerConfig::default(),
-        )));
-    }
-    if let Some((name, noise)) = spec.split_once('@')
-        && let Some(method) = crate::track::TrackingMethod::from_name(name)
-    {
-        let noise = crate::track::InitNoise::parse(&noise.replace(':', ","), 1)
-            .map_err(|e| format!("method `{spec}`: {e}"))?;
-        return Ok(Box::new(
-            crate::track::TrackerMethod::new(method, &crate::track::TrackerConfig::default())
-                .with_init_noise(noise),
-        ));
+    if let Some(method) = tracker_method_from_spec(spec, base) {
+        return Ok(Box::new(method?));
     }
     if spec == "static" {
         return Ok(Box::new(StaticMethod));
@@ -320,6 +333,31 @@ pub fn open_sequence(sequence: &SuiteSequence) -> Result<(Recording, Vec<Tick>),
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tracker_methods_are_built_on_the_given_parameters() {
+        let mut base = crate::track::TrackerConfig {
+            iterations: 3,
+            ..Default::default()
+        };
+        base.redetect.places_per_tick = 5;
+        for spec in ["eventtrack6d", "depth30", "events-only@5:5"] {
+            let m = tracker_method_from_spec(spec, &base).unwrap().unwrap();
+            assert_eq!(m.config().iterations, 3, "{spec}");
+            assert_eq!(m.config().redetect.places_per_tick, 5, "{spec}");
+        }
+        // The method's preset still applies on top: events-only never re-detects.
+        let m = tracker_method_from_spec("events-only", &base)
+            .unwrap()
+            .unwrap();
+        assert!(!m.config().redetect.enabled);
+        assert!(tracker_method_from_spec("static", &base).is_none());
+        let e = tracker_method_from_spec("depth30@x:1", &base)
+            .unwrap()
+            .err()
+            .unwrap();
+        assert!(e.contains("depth30@x:1"), "{e}");
+    }
 
     #[test]
     fn method_specs() {

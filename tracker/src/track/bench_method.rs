@@ -133,6 +133,11 @@ impl TrackerMethod {
         }
     }
 
+    /// The parameters it tracks with (the base with the method's preset applied).
+    pub fn config(&self) -> &TrackerConfig {
+        &self.config
+    }
+
     /// The same method with its first pose perturbed (report name gets a `@DEG,CM` suffix).
     pub fn with_init_noise(mut self, noise: InitNoise) -> Self {
         self.name = format!(

@@ -7,8 +7,8 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tracker::eval::bench::{
-    MethodResults, SuiteSequence, method_from_spec, open_sequence, results_json, results_markdown,
-    run_sequence,
+    MethodResults, SuiteSequence, method_from_spec_with, open_sequence, results_json,
+    results_markdown, run_sequence,
 };
 use tracker::eval::format_pose_csv;
 use tracker::eval::plot::line_plot;
@@ -34,6 +34,10 @@ pub struct BenchArgs {
     /// Where named suites are generated.
     #[arg(long, value_name = "DIR", default_value = "target/suites")]
     pub suites_dir: PathBuf,
+    /// Tracker parameters for the tracker methods: a TOML file with the `[tracker]` table's keys at top level, as
+    /// for `track --params` (each method's preset applies on top).
+    #[arg(long, value_name = "TOML")]
+    pub params: Option<PathBuf>,
 }
 
 /// Generates (or lets hil-sim reuse) the named suite and returns its directory.
@@ -130,9 +134,10 @@ fn load_suite(dir: &Path) -> Result<Vec<SuiteSequence>> {
 
 /// Runs the command.
 pub fn run(args: &BenchArgs) -> Result<()> {
+    let base = crate::track::tracker_params(args.params.as_deref())?;
     let mut methods = Vec::new();
     for spec in &args.methods {
-        methods.push(method_from_spec(spec).map_err(anyhow::Error::msg)?);
+        methods.push(method_from_spec_with(spec, &base).map_err(anyhow::Error::msg)?);
     }
     let given = Path::new(&args.suite);
     let (suite_name, dir) = if given.is_dir() {

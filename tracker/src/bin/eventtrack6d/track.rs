@@ -4,7 +4,7 @@ use crate::progress::bytes_bar;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use drivers::recording::Recording;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 use tracker::eval::{PoseRecord, PoseTrack, format_pose_csv, ground_truth_objects, parse_pose_csv};
 use tracker::render::{Renderer, RendererKind, create_renderer};
@@ -52,6 +52,22 @@ pub struct TrackArgs {
     pub overlay_every: u64,
 }
 
+/// Tracker parameters from a `--params` TOML file (the `[tracker]` table's keys at top level), validated; the
+/// defaults without one.
+pub fn tracker_params(path: Option<&Path>) -> Result<TrackerConfig> {
+    let Some(path) = path else {
+        return Ok(TrackerConfig::default());
+    };
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let config = toml::from_str::<TrackerConfig>(&text)
+        .with_context(|| format!("{}: invalid tracker parameters", path.display()))?;
+    config
+        .validate()
+        .with_context(|| format!("{}: invalid tracker parameters", path.display()))?;
+    Ok(config)
+}
+
 /// Runs the command.
 pub fn run(args: &TrackArgs) -> Result<()> {
     let method = TrackingMethod::from_name(&args.method).with_context(|| {
@@ -60,19 +76,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             args.method
         )
     })?;
-    let base = match &args.params {
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("reading {}", path.display()))?;
-            let config = toml::from_str::<TrackerConfig>(&text)
-                .with_context(|| format!("{}: invalid tracker parameters", path.display()))?;
-            config
-                .validate()
-                .with_context(|| format!("{}: invalid tracker parameters", path.display()))?;
-            config
-        }
-        None => TrackerConfig::default(),
-    };
+    let base = tracker_params(args.params.as_deref())?;
     let config = method.configure(&base);
     let noise = args
         .init_noise
