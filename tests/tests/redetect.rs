@@ -89,21 +89,28 @@ fn run(recording: &Recording, config: TrackerConfig) -> Run {
     }
 }
 
-/// Ticks 12 to 40 (0.1 to 0.33 s): the object is still out of the frozen ROI's reach by itself.
-const EARLY: std::ops::RangeInclusive<usize> = 12..=40;
-
-#[test]
-fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
+/// A mug translating at moderate speed for `seconds` (seed 11), generated into a temporary directory (kept
+/// alive by the returned guard).
+fn moving_mug(seconds: f64) -> (tempfile::TempDir, Recording) {
     let dir = tempfile::tempdir().unwrap();
     let cfg = GenerateConfig::new(
         ObjectSource::Library(ObjectKind::Mug),
         MotionProfile::Translation,
         SpeedLevel::Moderate,
-        1.5,
+        seconds,
         11,
     );
     generate(&cfg, dir.path(), |_| {}).expect("generating the recording");
     let recording = Recording::open(dir.path()).expect("recording");
+    (dir, recording)
+}
+
+/// Ticks 12 to 40 (0.1 to 0.33 s): the object is still out of the frozen ROI's reach by itself.
+const EARLY: std::ops::RangeInclusive<usize> = 12..=40;
+
+#[test]
+fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
+    let (_dir, recording) = moving_mug(1.5);
 
     // Without re-detection the estimate stays where it was put (`lost`) until the object happens to pass through
     // its ROI: it is still far off over the early ticks.
@@ -153,16 +160,7 @@ fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
 
 #[test]
 fn a_search_checks_all_its_places_in_one_tick_only_when_asked() {
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = GenerateConfig::new(
-        ObjectSource::Library(ObjectKind::Mug),
-        MotionProfile::Translation,
-        SpeedLevel::Moderate,
-        0.5,
-        11,
-    );
-    generate(&cfg, dir.path(), |_| {}).expect("generating the recording");
-    let recording = Recording::open(dir.path()).expect("recording");
+    let (_dir, recording) = moving_mug(0.5);
     let spread = TrackerConfig::default();
     let bound = 1 + 2 * spread.redetect.places_per_tick;
     let mut at_once = spread.clone();
