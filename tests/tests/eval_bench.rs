@@ -19,6 +19,7 @@ fn run(spec: &str, seq: &SuiteSequence) -> MethodResults {
     MethodResults {
         name: spec.into(),
         sequences: run_sequence(m.as_mut(), seq, &rec, &ticks).unwrap(),
+        parameters: m.parameters(),
     }
 }
 
@@ -67,6 +68,7 @@ fn bench_methods_on_a_short_recording() {
     let m = &doc["methods"]["gt-noise:0:0"];
     assert_eq!(m["mean"]["ar"].as_f64(), Some(100.0));
     assert!(m["mean_30hz"]["add_s"].is_number() && m["update_hz"].is_number());
+    assert!(m["parameters"].is_null(), "{}", m["parameters"]);
     let sq = &m["sequences"]["can-shake-moderate"];
     assert_eq!(sq["object"], "can");
     assert_eq!(sq["motion"], "shake");

@@ -38,6 +38,10 @@ pub trait Method {
     fn name(&self) -> &str;
     /// Tracks `input.object` over the recording and returns its poses (typically one per tick).
     fn track(&mut self, input: &MethodInput<'_>) -> Result<Vec<PoseRecord>, EvalError>;
+    /// The parameters it runs with, as the report records them (`None`: its name says everything).
+    fn parameters(&self) -> Option<serde_json::Value> {
+        None
+    }
 }
 
 /// Holds the first pose forever: the floor any tracker must beat.
@@ -235,6 +239,8 @@ pub struct MethodResults {
     pub name: String,
     /// Per sequence (and object).
     pub sequences: Vec<SequenceResult>,
+    /// The parameters it ran with ([`Method::parameters`]), recorded in `results.json`.
+    pub parameters: Option<serde_json::Value>,
 }
 
 impl MethodResults {
@@ -345,7 +351,13 @@ mod tests {
             let m = tracker_method_from_spec(spec, &base).unwrap().unwrap();
             assert_eq!(m.config().iterations, 3, "{spec}");
             assert_eq!(m.config().redetect.places_per_tick, 5, "{spec}");
+            // The report records exactly the parameters it tracks with.
+            let recorded = m.parameters().unwrap();
+            assert_eq!(recorded["redetect"]["places_per_tick"], 5, "{spec}");
+            let back: crate::track::TrackerConfig = serde_json::from_value(recorded).unwrap();
+            assert_eq!(&back, m.config(), "{spec}");
         }
+        assert!(method_from_spec("static").unwrap().parameters().is_none());
         // The method's preset still applies on top: events-only never re-detects.
         let m = tracker_method_from_spec("events-only", &base)
             .unwrap()

@@ -56,6 +56,7 @@ pub fn results_json(suite: &str, results: &[MethodResults], limit: AucLimit) -> 
                 "mean": summary_json(&m.mean(false, limit)),
                 "mean_30hz": summary_json(&m.mean(true, limit)),
                 "update_hz": finite_or_null(m.update_hz()),
+                "parameters": m.parameters.clone().unwrap_or(Value::Null),
                 "objects": objects,
                 "sequences": seqs,
             }),

@@ -165,6 +165,10 @@ impl Method for TrackerMethod {
         &self.name
     }
 
+    fn parameters(&self) -> Option<serde_json::Value> {
+        serde_json::to_value(&self.config).ok()
+    }
+
     fn track(&mut self, input: &MethodInput<'_>) -> Result<Vec<PoseRecord>, EvalError> {
         let rec = input.recording;
         let (t0, gt0) = input.first_pose;

@@ -156,6 +156,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         .map(|m| MethodResults {
             name: m.name().to_string(),
             sequences: Vec::new(),
+            parameters: m.parameters(),
         })
         .collect();
     std::fs::create_dir_all(args.out.join("plots"))
@@ -173,6 +174,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     let mut md = results_markdown(&suite_name, &results, args.auc.limit());
     md.push_str(&plot_legend(&results));
+    md.push_str(&match &args.params {
+        Some(p) => format!(
+            "\nTracker parameters: `{}` over the defaults, each method's preset on top; the values each method \
+             ran with are under `parameters` in results.json.\n",
+            p.display()
+        ),
+        None => "\nTracker parameters: the defaults, each method's preset on top (values under `parameters` in \
+                 results.json).\n"
+            .into(),
+    });
     let json = results_json(&suite_name, &results, args.auc.limit());
     let md_path = args.out.join("results.md");
     std::fs::write(&md_path, &md).with_context(|| format!("cannot write {}", md_path.display()))?;
