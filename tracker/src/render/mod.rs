@@ -156,6 +156,12 @@ pub trait Renderer {
     ) -> Result<(), RenderError> {
         self.render(scene, &camera.crop(roi), target)
     }
+
+    /// An independent renderer with the same meshes under the same handles, for another thread; `None` when the
+    /// backend has no cheap way to make one (the GPU backend: one device queue). Both render identically.
+    fn fork(&self) -> Option<Box<dyn Renderer + Send>> {
+        None
+    }
 }
 
 #[cfg(test)]

@@ -228,6 +228,9 @@ pub struct TrackerConfig {
     pub realtime_priority: u8,
     /// Renderer of the tracker's render-and-compare: `cpu` (default, deterministic) or `gpu` (wgpu / Vulkan).
     pub renderer: crate::render::RendererKind,
+    /// `[tracker.parameters]`: the tracker's parameters, the keys of `track --params` (each method's preset, e.g.
+    /// `depth30`'s, applies on top); every key defaults.
+    pub parameters: crate::track::TrackerConfig,
 }
 
 impl Default for TrackerConfig {
@@ -236,6 +239,7 @@ impl Default for TrackerConfig {
             method: "eventtrack6d".into(),
             realtime_priority: 0,
             renderer: crate::render::RendererKind::Cpu,
+            parameters: crate::track::TrackerConfig::default(),
         }
     }
 }
@@ -488,6 +492,12 @@ impl Config {
         if self.tracker.method.trim().is_empty() {
             return Err(bad("tracker.method", "must not be empty".into()));
         }
+        if let Err(e) = self.tracker.parameters.validate() {
+            return Err(bad(
+                &format!("tracker.parameters.{}", e.key),
+                format!("{} is out of range: {}", e.value, e.expected),
+            ));
+        }
         for (i, o) in self.objects.iter().enumerate() {
             let key = |k: &str| format!("objects[{i}].{k}");
             if o.name.is_empty() || o.name.contains(['/', '\\', ',', ' ']) {
@@ -727,6 +737,33 @@ mod tests {
         assert!(e.contains("`tracker.renderer`") && e.contains("tpu"), "{e}");
         let c = parse("[source]\nkind = \"demo\"\n[tracker]\nrenderer = \"gpu\"\n").unwrap();
         assert_eq!(c.tracker.renderer, crate::render::RendererKind::Gpu);
+    }
+
+    #[test]
+    fn tracker_parameters_are_read_and_checked() {
+        let c = parse(
+            "[source]\nkind = \"demo\"\n[tracker.parameters]\nobject_threads = 2\n\
+             [tracker.parameters.redetect]\nplaces_per_tick = 3\n",
+        )
+        .unwrap();
+        assert_eq!(c.tracker.parameters.object_threads, 2);
+        assert_eq!(c.tracker.parameters.redetect.places_per_tick, 3);
+        // Keys not given keep their defaults.
+        assert_eq!(
+            c.tracker.parameters.roi_size,
+            crate::track::TrackerConfig::default().roi_size
+        );
+        let e = parse("[source]\nkind = \"demo\"\n[tracker.parameters]\nroi_sise = 128\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("roi_sise") && e.contains("line 4"), "{e}");
+        let e = parse("[source]\nkind = \"demo\"\n[tracker.parameters]\nobject_threads = 300\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`tracker.parameters.object_threads`") && e.contains("300"),
+            "{e}"
+        );
     }
 
     #[test]

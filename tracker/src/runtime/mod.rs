@@ -217,7 +217,12 @@ impl std::fmt::Display for Summary {
 /// tokio runtime; call it from a plain thread (not from inside an async task).
 pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
     let (source, scene, timeline) = setup::build_source(config)?;
-    let tracker = build_tracker(&config.tracker.method, config.tracker.renderer, &scene)?;
+    let tracker = build_tracker(
+        &config.tracker.method,
+        config.tracker.renderer,
+        &config.tracker.parameters,
+        &scene,
+    )?;
     let objects = tracker.objects().to_vec();
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)

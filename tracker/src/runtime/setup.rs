@@ -58,6 +58,7 @@ pub struct TrackerScene {
 pub fn build_tracker(
     method: &str,
     renderer: RendererKind,
+    parameters: &TrackerConfig,
     scene: &TrackerScene,
 ) -> Result<Box<dyn PoseTracker>, RuntimeError> {
     match method {
@@ -72,7 +73,9 @@ pub fn build_tracker(
             let method = TrackingMethod::from_name(name).ok_or_else(|| {
                 RuntimeError::Tracker(format!("tracker.method `{name}` is not known"))
             })?;
-            Ok(Box::new(build_eventtrack6d(method, renderer, scene)?))
+            Ok(Box::new(build_eventtrack6d(
+                method, renderer, parameters, scene,
+            )?))
         }
         other => Err(RuntimeError::Tracker(format!(
             "tracker.method `{other}` is not known (available: {})",
@@ -81,10 +84,12 @@ pub fn build_tracker(
     }
 }
 
-/// The EventTrack6D tracker (or one of its baselines) for `scene`, with default parameters and `renderer`.
+/// The EventTrack6D tracker (or one of its baselines) for `scene`, on `parameters` with the method's preset on
+/// top, rendering with `renderer`.
 fn build_eventtrack6d(
     method: TrackingMethod,
     renderer: RendererKind,
+    parameters: &TrackerConfig,
     scene: &TrackerScene,
 ) -> Result<EventTrack6d, RuntimeError> {
     let camera = |c: &drivers::recording::CameraIntrinsics, what: &str| {
@@ -124,7 +129,7 @@ fn build_eventtrack6d(
             },
         });
     }
-    let config = method.configure(&TrackerConfig::default());
+    let config = method.configure(parameters);
     let renderer = create_renderer(renderer)
         .map_err(|e| RuntimeError::Tracker(format!("tracker.renderer: {e}")))?;
     EventTrack6d::new(config, rig, objects, renderer)

@@ -120,6 +120,10 @@ pub struct TrackerConfig {
     pub quality: QualityConfig,
     /// Re-detection of objects that are not `tracking`, at depth frames.
     pub redetect: RedetectConfig,
+    /// Threads that step the objects of a tick in parallel, the tracker's own included: 0 = one per available
+    /// core, 1 = all on the tracker's thread. Never more than there are objects; only renderers that can fork
+    /// (the CPU renderer) run in parallel. Poses do not depend on it.
+    pub object_threads: usize,
 }
 
 impl Default for TrackerConfig {
@@ -160,6 +164,7 @@ impl Default for TrackerConfig {
             intensity_term: IntensityTerm::default(),
             quality: QualityConfig::default(),
             redetect: RedetectConfig::default(),
+            object_threads: 0,
         }
     }
 }

@@ -49,6 +49,12 @@ impl TrackerConfig {
             "must be 16 to 1024 pixels",
         )?;
         check(
+            "object_threads",
+            self.object_threads as f64,
+            |v| v <= 256.0,
+            "must be 0 (one per core) to 256",
+        )?;
+        check(
             "roi_scale",
             self.roi_scale,
             |v| (0.5..=4.0).contains(&v),

@@ -38,7 +38,8 @@ struct Instance {
 /// renders at the same size do not allocate. Output is bit-identical for identical inputs.
 #[derive(Debug, Default)]
 pub struct CpuRenderer {
-    meshes: Vec<PreparedMesh>,
+    /// Shared with the renderers [`Renderer::fork`] made (prepared meshes never change).
+    meshes: Vec<Arc<PreparedMesh>>,
     vis: VisBuffer,
     view: Vec<Vec3A>,
     codes: Vec<u8>,
@@ -240,10 +241,17 @@ fn pose_is_finite(pose: &Isometry3<f64>) -> bool {
 }
 
 impl Renderer for CpuRenderer {
+    fn fork(&self) -> Option<Box<dyn Renderer + Send>> {
+        Some(Box::new(Self {
+            meshes: self.meshes.clone(),
+            ..Self::default()
+        }))
+    }
+
     fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
         let id = u32::try_from(self.meshes.len())
             .map_err(|_| RenderError::Backend("too many meshes".into()))?;
-        self.meshes.push(PreparedMesh::new(mesh));
+        self.meshes.push(Arc::new(PreparedMesh::new(mesh)));
         Ok(MeshId(id))
     }
 

@@ -99,6 +99,8 @@ pub struct EventTrack6d {
     names: Vec<String>,
     rig: TrackingRig,
     renderer: Box<dyn Renderer + Send>,
+    /// Forks of `renderer` for the threads that step objects beside the tracker's own ([`TrackerConfig::object_threads`]).
+    workers: Vec<Box<dyn Renderer + Send>>,
     surface: EventSurface,
     objects: Vec<ObjectTrack>,
     scene: Vec<SceneObject>,
@@ -120,6 +122,48 @@ struct Redetection {
     frame: Option<(u64, i64)>,
     /// Per object: the search's results so far.
     searches: Vec<Search>,
+}
+
+/// What stepping one object at a tick needs besides the object and a renderer (shared, read-only).
+struct ObjectStep<'a> {
+    scene: &'a Scene<'a>,
+    camera: &'a PinholeCamera,
+    config: &'a TrackerConfig,
+    inputs: TickInputs<'a>,
+    refines: bool,
+    depth_now: bool,
+}
+
+impl ObjectStep<'_> {
+    /// Renders each object's ROI and refines (or holds) it; returns the number of failed renders.
+    fn run(&self, objects: &mut [ObjectTrack], renderer: &mut dyn Renderer) -> u64 {
+        let mut errors = 0;
+        let t_us = self.inputs.t_us;
+        for o in objects {
+            if t_us < o.t_us {
+                continue;
+            }
+            let roi = if self.refines {
+                o.update_roi(self.camera, self.config, t_us, self.depth_now)
+            } else {
+                None
+            };
+            if let Some(roi) = roi
+                && renderer
+                    .render_roi(self.scene, self.camera, &roi, &mut o.target)
+                    .is_err()
+            {
+                errors += 1;
+                o.roi = None;
+            }
+            if self.refines {
+                o.refine(&self.inputs, self.config);
+            } else {
+                o.hold(t_us);
+            }
+        }
+        errors
+    }
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -196,6 +240,13 @@ impl EventTrack6d {
             names.push(o.name);
         }
         let objects_len = tracks.len();
+        let threads = match config.object_threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n,
+        };
+        let workers: Vec<_> = (1..threads.min(objects_len))
+            .map_while(|_| renderer.fork())
+            .collect();
         let cam = rig.event_camera;
         let depth_cam = rig.depth.camera;
         let cell = config.redetect.cell_px.max(1);
@@ -222,6 +273,7 @@ impl EventTrack6d {
             names,
             rig,
             renderer,
+            workers,
             objects: tracks,
             scene,
             depth_t_us: None,
@@ -350,35 +402,38 @@ impl PoseTracker for EventTrack6d {
         let scene = Scene::objects(&self.scene)
             .geometry_only()
             .normals_on_surface_grid(self.config.max_surface_points);
-        for o in &mut self.objects {
-            if t_us < o.t_us {
-                continue;
-            }
-            let dt_obj = inputs.dt_s;
-            let local = TickInputs {
-                dt_s: dt_obj,
-                ..inputs
-            };
-            let roi = if refines {
-                o.update_roi(&self.rig.event_camera, &self.config, t_us, depth_now)
-            } else {
-                None
-            };
-            if let Some(roi) = roi
-                && self
-                    .renderer
-                    .render_roi(&scene, &self.rig.event_camera, &roi, &mut o.target)
-                    .is_err()
-            {
-                self.counters.render_errors += 1;
-                o.roi = None;
-            }
-            if refines {
-                o.refine(&local, &self.config);
-            } else {
-                o.hold(t_us);
-            }
-        }
+        let step = ObjectStep {
+            scene: &scene,
+            camera: &self.rig.event_camera,
+            config: &self.config,
+            inputs,
+            refines,
+            depth_now,
+        };
+        let render_errors = if self.workers.is_empty() {
+            step.run(&mut self.objects, self.renderer.as_mut())
+        } else {
+            // Each object's step reads only the shared inputs and writes only its own track, so the split
+            // changes nothing in the results.
+            let per_thread = self.objects.len().div_ceil(self.workers.len() + 1);
+            let mut chunks = self.objects.chunks_mut(per_thread);
+            let own = chunks.next().unwrap_or_default();
+            let renderer = self.renderer.as_mut();
+            let workers = &mut self.workers;
+            std::thread::scope(|s| {
+                let step = &step;
+                let others: Vec<_> = chunks
+                    .zip(workers.iter_mut())
+                    .map(|(chunk, r)| s.spawn(move || step.run(chunk, r.as_mut())))
+                    .collect();
+                let mut errors = step.run(own, renderer);
+                for h in others {
+                    errors += h.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+                }
+                errors
+            })
+        };
+        self.counters.render_errors += render_errors;
         if depth_now {
             self.counters.depth_frames += 1;
             self.depth_t_us = None;

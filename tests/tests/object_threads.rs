@@ -1,0 +1,142 @@
+//! Several objects stepped on several threads: each thread renders with its own fork of the renderer, and the
+//! poses, qualities and states are bit for bit those of the single-threaded tracker.
+
+use drivers::recording::Recording;
+use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
+use hil_sim::motion::{MotionProfile, SpeedLevel};
+use hil_sim::objects::ObjectKind;
+use nalgebra::Translation3;
+use std::collections::HashSet;
+use std::sync::{Arc, Mutex};
+use std::thread::ThreadId;
+use tracker::eval::{PoseTrack, recording_ticks};
+use tracker::geometry::PinholeCamera;
+use tracker::mesh::Mesh;
+use tracker::render::{CpuRenderer, MeshId, RenderError, RenderTarget, Renderer, Scene};
+use tracker::track::{
+    EventTrack6d, PoseEstimate, TrackerConfig, recording_object, recording_rig, track_recording,
+};
+
+/// The CPU renderer, noting which threads render through it or its forks.
+struct ThreadNotingRenderer {
+    inner: Box<dyn Renderer + Send>,
+    threads: Arc<Mutex<HashSet<ThreadId>>>,
+}
+
+impl Renderer for ThreadNotingRenderer {
+    fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
+        self.inner.add_mesh(mesh)
+    }
+
+    fn render(
+        &mut self,
+        scene: &Scene<'_>,
+        camera: &PinholeCamera,
+        target: &mut RenderTarget,
+    ) -> Result<(), RenderError> {
+        self.threads
+            .lock()
+            .unwrap()
+            .insert(std::thread::current().id());
+        self.inner.render(scene, camera, target)
+    }
+
+    fn fork(&self) -> Option<Box<dyn Renderer + Send>> {
+        Some(Box::new(Self {
+            inner: self.inner.fork()?,
+            threads: self.threads.clone(),
+        }))
+    }
+}
+
+/// Every estimate of every tick, and the most threads that rendered within one tick.
+fn run(recording: &Recording, threads: usize) -> (Vec<PoseEstimate>, usize) {
+    let truth = PoseTrack::from_samples(recording.ground_truth.as_deref().unwrap(), "mug");
+    let ticks = recording_ticks(recording).unwrap();
+    let first = ticks[0].t_us;
+    let pose = truth.interpolated_at(first).unwrap();
+    let mug = recording_object(recording, "mug", first, pose).unwrap();
+    // Two mugs that are not there: one 10 cm behind the real one and a little aside, which the real one hides in
+    // part (so the renders carry the other objects' masks), and one beside them. Re-detection is off so that
+    // neither is pulled onto the real mug.
+    let mut behind = mug.clone();
+    behind.name = "behind".into();
+    behind.first_pose = Translation3::new(0.03, 0.0, 0.10) * pose;
+    let mut beside = mug.clone();
+    beside.name = "beside".into();
+    beside.first_pose = Translation3::new(-0.15, 0.0, 0.0) * pose;
+    let mut config = TrackerConfig {
+        object_threads: threads,
+        ..TrackerConfig::default()
+    };
+    config.redetect.enabled = false;
+    let seen = Arc::new(Mutex::new(HashSet::new()));
+    let renderer = ThreadNotingRenderer {
+        inner: Box::new(CpuRenderer::new()),
+        threads: seen.clone(),
+    };
+    let mut tracker = EventTrack6d::new(
+        config,
+        recording_rig(recording).unwrap(),
+        vec![mug, behind, beside],
+        Box::new(renderer),
+    )
+    .unwrap();
+    let mut out = Vec::new();
+    let mut most = 0;
+    track_recording(
+        recording,
+        &mut tracker,
+        first,
+        |_, estimates, _| {
+            out.extend_from_slice(estimates);
+            let mut seen = seen.lock().unwrap();
+            most = most.max(seen.len());
+            seen.clear();
+        },
+        |_| {},
+    )
+    .unwrap();
+    (out, most)
+}
+
+#[test]
+fn objects_stepped_on_several_threads_give_the_single_threaded_poses() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = GenerateConfig::new(
+        ObjectSource::Library(ObjectKind::Mug),
+        MotionProfile::Translation,
+        SpeedLevel::Moderate,
+        0.6,
+        11,
+    );
+    generate(&cfg, dir.path(), |_| {}).unwrap();
+    let recording = Recording::open(dir.path()).unwrap();
+
+    let (one, threads_one) = run(&recording, 1);
+    let (three, threads_three) = run(&recording, 3);
+    assert_eq!(threads_one, 1);
+    assert_eq!(threads_three, 3, "the objects were not spread over threads");
+    assert_eq!(one.len(), three.len());
+    assert!(one.len() >= 3 * 60, "{} estimates", one.len());
+    for (a, b) in one.iter().zip(&three) {
+        assert_eq!(
+            (a.object, a.t_us, a.pose, a.quality, a.state),
+            (b.object, b.t_us, b.pose, b.quality, b.state),
+            "object {} at {} us",
+            a.object,
+            a.t_us
+        );
+    }
+    // The real mug is followed in both (the comparison above is not of two failures).
+    let truth = PoseTrack::from_samples(recording.ground_truth.as_deref().unwrap(), "mug");
+    let worst = one
+        .iter()
+        .filter(|e| e.object == 0)
+        .map(|e| {
+            (e.pose.translation.vector - truth.interpolated_at(e.t_us).unwrap().translation.vector)
+                .norm()
+        })
+        .fold(0.0, f64::max);
+    assert!(worst < 0.02, "mug off by up to {worst:.3} m");
+}
