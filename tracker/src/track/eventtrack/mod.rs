@@ -2,12 +2,14 @@
 //! its own ROI, with mutual occlusion through the other objects' rendered masks.
 
 mod lost_search;
+mod step;
 
 use super::config::{DepthUse, TrackerConfig};
 use super::object::{ObjectTrack, TickInputs};
 use super::redetect::{Cluster, DepthBackground};
 use super::{PoseEstimate, PoseTracker, TrackingState};
 use lost_search::{PendingPlace, Search};
+use step::ObjectStep;
 
 use crate::geometry::{PinholeCamera, se3};
 use crate::mesh::{Mesh, Symmetry};
@@ -122,48 +124,6 @@ struct Redetection {
     frame: Option<(u64, i64)>,
     /// Per object: the search's results so far.
     searches: Vec<Search>,
-}
-
-/// What stepping one object at a tick needs besides the object and a renderer (shared, read-only).
-struct ObjectStep<'a> {
-    scene: &'a Scene<'a>,
-    camera: &'a PinholeCamera,
-    config: &'a TrackerConfig,
-    inputs: TickInputs<'a>,
-    refines: bool,
-    depth_now: bool,
-}
-
-impl ObjectStep<'_> {
-    /// Renders each object's ROI and refines (or holds) it; returns the number of failed renders.
-    fn run(&self, objects: &mut [ObjectTrack], renderer: &mut dyn Renderer) -> u64 {
-        let mut errors = 0;
-        let t_us = self.inputs.t_us;
-        for o in objects {
-            if t_us < o.t_us {
-                continue;
-            }
-            let roi = if self.refines {
-                o.update_roi(self.camera, self.config, t_us, self.depth_now)
-            } else {
-                None
-            };
-            if let Some(roi) = roi
-                && renderer
-                    .render_roi(self.scene, self.camera, &roi, &mut o.target)
-                    .is_err()
-            {
-                errors += 1;
-                o.roi = None;
-            }
-            if self.refines {
-                o.refine(&self.inputs, self.config);
-            } else {
-                o.hold(t_us);
-            }
-        }
-        errors
-    }
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -410,29 +370,8 @@ impl PoseTracker for EventTrack6d {
             refines,
             depth_now,
         };
-        let render_errors = if self.workers.is_empty() {
-            step.run(&mut self.objects, self.renderer.as_mut())
-        } else {
-            // Each object's step reads only the shared inputs and writes only its own track, so the split
-            // changes nothing in the results.
-            let per_thread = self.objects.len().div_ceil(self.workers.len() + 1);
-            let mut chunks = self.objects.chunks_mut(per_thread);
-            let own = chunks.next().unwrap_or_default();
-            let renderer = self.renderer.as_mut();
-            let workers = &mut self.workers;
-            std::thread::scope(|s| {
-                let step = &step;
-                let others: Vec<_> = chunks
-                    .zip(workers.iter_mut())
-                    .map(|(chunk, r)| s.spawn(move || step.run(chunk, r.as_mut())))
-                    .collect();
-                let mut errors = step.run(own, renderer);
-                for h in others {
-                    errors += h.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
-                }
-                errors
-            })
-        };
+        let render_errors =
+            step.run_split(&mut self.objects, self.renderer.as_mut(), &mut self.workers);
         self.counters.render_errors += render_errors;
         if depth_now {
             self.counters.depth_frames += 1;

@@ -1,0 +1,77 @@
+//! One tick's step of a set of objects (render the ROI, refine or hold), which the tracker runs on its own thread
+//! or splits over several.
+
+use crate::geometry::PinholeCamera;
+use crate::render::{Renderer, Scene};
+use crate::track::config::TrackerConfig;
+use crate::track::object::{ObjectTrack, TickInputs};
+
+/// What stepping one object at a tick needs besides the object and a renderer (shared, read-only).
+pub(super) struct ObjectStep<'a> {
+    pub(super) scene: &'a Scene<'a>,
+    pub(super) camera: &'a PinholeCamera,
+    pub(super) config: &'a TrackerConfig,
+    pub(super) inputs: TickInputs<'a>,
+    pub(super) refines: bool,
+    pub(super) depth_now: bool,
+}
+
+impl ObjectStep<'_> {
+    /// Renders each object's ROI and refines (or holds) it; returns the number of failed renders.
+    pub(super) fn run(&self, objects: &mut [ObjectTrack], renderer: &mut dyn Renderer) -> u64 {
+        let mut errors = 0;
+        let t_us = self.inputs.t_us;
+        for o in objects {
+            if t_us < o.t_us {
+                continue;
+            }
+            let roi = if self.refines {
+                o.update_roi(self.camera, self.config, t_us, self.depth_now)
+            } else {
+                None
+            };
+            if let Some(roi) = roi
+                && renderer
+                    .render_roi(self.scene, self.camera, &roi, &mut o.target)
+                    .is_err()
+            {
+                errors += 1;
+                o.roi = None;
+            }
+            if self.refines {
+                o.refine(&self.inputs, self.config);
+            } else {
+                o.hold(t_us);
+            }
+        }
+        errors
+    }
+
+    /// [`Self::run`] over all `objects`: split into one share per renderer, `renderer` stepping the first share on
+    /// this thread and each of `workers` one of the others on a scoped thread. Each object's step reads only the
+    /// shared inputs and writes only its own track, so the split changes nothing in the results.
+    pub(super) fn run_split(
+        &self,
+        objects: &mut [ObjectTrack],
+        renderer: &mut dyn Renderer,
+        workers: &mut [Box<dyn Renderer + Send>],
+    ) -> u64 {
+        if workers.is_empty() {
+            return self.run(objects, renderer);
+        }
+        let per_thread = objects.len().div_ceil(workers.len() + 1);
+        let mut shares = objects.chunks_mut(per_thread);
+        let own = shares.next().unwrap_or_default();
+        std::thread::scope(|s| {
+            let others: Vec<_> = shares
+                .zip(workers.iter_mut())
+                .map(|(share, r)| s.spawn(move || self.run(share, r.as_mut())))
+                .collect();
+            let mut errors = self.run(own, renderer);
+            for h in others {
+                errors += h.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+            }
+            errors
+        })
+    }
+}
