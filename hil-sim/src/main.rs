@@ -3,7 +3,7 @@
 use anyhow::Context;
 use clap::{Parser, Subcommand};
 use drivers::event::Geometry;
-use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
+use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use hil_sim::pattern::{RotatingBar, write_rotating_bar};
@@ -56,6 +56,12 @@ enum Command {
         /// Leave out the hand-like occluders.
         #[arg(long)]
         no_hands: bool,
+        /// A further object in the scene, tracked too (repeatable): library name or `.obj` path, its motion
+        /// and speed (default: those of `--object`) and where its trajectory is centred relative to the first
+        /// object's, metres in the camera frame (default: 15 cm nearer the camera per further object, so it
+        /// passes in front of the others). E.g. `--with can:translation:slow:0.05,0,-0.15`.
+        #[arg(long = "with", value_name = "NAME[:MOTION[:SPEED[:X,Y,Z]]]")]
+        with: Vec<String>,
     },
     /// Generate (or reuse, when already there with the same parameters) a fixed named suite of recordings:
     /// `dev` (every library object x three motion profiles at slow, moderate and fast speed, 3 s each) or
@@ -125,6 +131,7 @@ fn main() -> ExitCode {
             drop_depth,
             noise_hz,
             no_hands,
+            with,
         } => {
             let object = match ObjectKind::from_name(&object) {
                 Some(k) => ObjectSource::Library(k),
@@ -139,6 +146,15 @@ fn main() -> ExitCode {
                 }
             };
             let mut config = GenerateConfig::new(object, motion, speed, seconds, seed);
+            for (k, spec) in with.iter().enumerate() {
+                match Companion::parse(spec, k + 1, motion, speed) {
+                    Ok(c) => config.companions.push(c),
+                    Err(e) => {
+                        eprintln!("error: --with {e}");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            }
             config.depth_drop_probability = drop_depth;
             config.esim.noise_rate_hz = noise_hz;
             config.hands = !no_hands;

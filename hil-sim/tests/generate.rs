@@ -5,7 +5,7 @@ use drivers::event::EventBuffer;
 use drivers::recording::Recording;
 use drivers::timeline::ideal_edges;
 use hil_sim::esim::{EsimConfig, EventSimulator};
-use hil_sim::generate::{GenerateConfig, ObjectSource, generate, sensor_log_at};
+use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate, sensor_log_at};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use std::path::Path;
@@ -222,4 +222,87 @@ fn a_user_obj_with_material_and_texture_is_copied_into_the_recording() {
     }
     let loaded = tracker::mesh::load_obj(&rec.mesh_path("my_can"), &Default::default()).unwrap();
     assert!((loaded.mesh.diameter() - rec.models[0].diameter_m).abs() < 1e-9);
+}
+
+/// Pixels of depth frame 0 nearer than `metres` (and measured).
+fn depth_pixels_nearer_than(dir: &Path, metres: f32) -> usize {
+    let rec = Recording::open(dir).unwrap();
+    let frame = rec.depth_frame(0).unwrap();
+    frame
+        .depth_m
+        .iter()
+        .filter(|&&z| z > 0.0 && z < metres)
+        .count()
+}
+
+#[test]
+fn a_companion_object_is_rendered_and_in_the_ground_truth() {
+    let mut cfg = config(0.05);
+    cfg.companions.push(Companion {
+        object: ObjectSource::Library(ObjectKind::Can),
+        motion: MotionProfile::HandSwitch,
+        speed: SpeedLevel::Moderate,
+        offset_m: Companion::default_offset(1),
+    });
+    let out = tempfile::tempdir().unwrap();
+    generate(&cfg, out.path(), |_| {}).unwrap();
+    let rec = Recording::open(out.path()).unwrap();
+    let names: Vec<&str> = rec.models.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["can", "mug"]);
+    assert!(out.path().join("models/can.obj").is_file());
+    // Both objects at every ground-truth time, the can on its own trajectory 15 cm nearer the camera.
+    let gt = rec.ground_truth.as_deref().unwrap();
+    let (cans, mugs): (Vec<_>, Vec<_>) = gt.iter().partition(|s| s.object == "can");
+    assert_eq!(cans.len(), mugs.len());
+    assert!(cans.len() >= 50, "{} rows", cans.len());
+    for (c, m) in cans.iter().zip(&mugs) {
+        assert_eq!(c.t_us, m.t_us);
+        assert!(
+            (c.translation[2] - (m.translation[2] - 0.15)).abs() < 0.1,
+            "{c:?} {m:?}"
+        );
+    }
+    assert_eq!(rec.meta.parameters["companions"][0]["object"], "can");
+    // The depth camera sees the can in front of everything the single-object scene has.
+    let near = depth_pixels_nearer_than(out.path(), 0.54);
+    let alone = tempfile::tempdir().unwrap();
+    cfg.companions.clear();
+    generate(&cfg, alone.path(), |_| {}).unwrap();
+    let near_alone = depth_pixels_nearer_than(alone.path(), 0.54);
+    assert!(
+        near > 1000 && near_alone < near / 10,
+        "pixels nearer than 0.54 m: {near} with the can, {near_alone} without"
+    );
+    assert!(
+        Recording::open(alone.path())
+            .unwrap()
+            .meta
+            .parameters
+            .get("companions")
+            .is_none(),
+        "a single-object recording's metadata carries no companions"
+    );
+}
+
+#[test]
+fn objects_of_one_recording_need_distinct_names_and_sensible_offsets() {
+    let out = tempfile::tempdir().unwrap();
+    let mut cfg = config(0.02);
+    cfg.companions.push(Companion {
+        object: ObjectSource::Library(ObjectKind::Mug),
+        motion: MotionProfile::Shake,
+        speed: SpeedLevel::Slow,
+        offset_m: [0.1, 0.0, 0.0],
+    });
+    let e = generate(&cfg, out.path(), |_| {}).unwrap_err().to_string();
+    assert!(e.contains("two objects named `mug`"), "{e}");
+    cfg.companions[0].object = ObjectSource::Library(ObjectKind::Can);
+    cfg.companions[0].offset_m = [0.0, 0.0, -0.5];
+    let e = generate(&cfg, out.path(), |_| {}).unwrap_err().to_string();
+    assert!(
+        e.contains("companion 1 offset") && e.contains("0.25 m"),
+        "{e}"
+    );
+    cfg.companions[0].offset_m = [f64::NAN, 0.0, 0.0];
+    assert!(generate(&cfg, out.path(), |_| {}).is_err());
 }

@@ -30,11 +30,87 @@ pub enum ObjectSource {
     File(PathBuf),
 }
 
+/// A further object in the scene, moving on its own trajectory (with its own hand) beside the first.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Companion {
+    /// The object.
+    pub object: ObjectSource,
+    /// Its motion profile.
+    pub motion: MotionProfile,
+    /// Its speed level.
+    pub speed: SpeedLevel,
+    /// Where its trajectory is centred relative to the first object's, metres, camera frame (negative z:
+    /// nearer the camera, so it passes in front of the first object).
+    pub offset_m: [f64; 3],
+}
+
+impl Companion {
+    /// Parses a command-line companion `NAME[:MOTION[:SPEED[:X,Y,Z]]]` (library name or `.obj` path; offset in
+    /// metres). Motion and speed default to `motion` and `speed`; the offset to [`Self::default_offset`]`(k)`.
+    pub fn parse(
+        spec: &str,
+        k: usize,
+        motion: MotionProfile,
+        speed: SpeedLevel,
+    ) -> Result<Self, String> {
+        let mut parts = spec.split(':');
+        let name = parts.next().unwrap_or_default().trim();
+        let object = match ObjectKind::from_name(name) {
+            Some(kind) => ObjectSource::Library(kind),
+            None if name.ends_with(".obj") => ObjectSource::File(PathBuf::from(name)),
+            None => {
+                return Err(format!(
+                    "`{spec}`: unknown object `{name}` (a library name or a path to an .obj file)"
+                ));
+            }
+        };
+        let motion = match parts.next() {
+            Some(m) => m.parse().map_err(|e| format!("`{spec}`: {e}"))?,
+            None => motion,
+        };
+        let speed = match parts.next() {
+            Some(v) => v.parse().map_err(|e| format!("`{spec}`: {e}"))?,
+            None => speed,
+        };
+        let offset_m = match parts.next() {
+            Some(o) => {
+                let v: Vec<f64> = o
+                    .split(',')
+                    .map(|x| x.trim().parse::<f64>())
+                    .collect::<Result<_, _>>()
+                    .map_err(|e| format!("`{spec}`: offset `{o}`: {e}"))?;
+                <[f64; 3]>::try_from(v)
+                    .map_err(|_| format!("`{spec}`: offset `{o}` must be X,Y,Z in metres"))?
+            }
+            None => Self::default_offset(k),
+        };
+        if let Some(extra) = parts.next() {
+            return Err(format!(
+                "`{spec}`: unexpected `:{extra}` (NAME[:MOTION[:SPEED[:X,Y,Z]]])"
+            ));
+        }
+        Ok(Self {
+            object,
+            motion,
+            speed,
+            offset_m,
+        })
+    }
+
+    /// The offset of the `k`-th companion (from 1) when none is given: 15 cm nearer the camera per companion,
+    /// so that each passes in front of the objects behind it as they move.
+    pub fn default_offset(k: usize) -> [f64; 3] {
+        [0.0, 0.0, -0.15 * k as f64]
+    }
+}
+
 /// What to generate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GenerateConfig {
     /// The tracked object.
     pub object: ObjectSource,
+    /// Further objects (each tracked too, and in the ground truth), empty by default.
+    pub companions: Vec<Companion>,
     /// Motion profile.
     pub motion: MotionProfile,
     /// Speed level.
@@ -64,6 +140,7 @@ impl GenerateConfig {
     ) -> Self {
         Self {
             object,
+            companions: Vec::new(),
             motion,
             speed,
             seconds,
@@ -137,6 +214,17 @@ fn check(config: &GenerateConfig) -> Result<(), GenerateError> {
     if !(0.0..=1.0).contains(&config.depth_drop_probability) {
         return bad("depth frame drop probability must be in [0, 1]");
     }
+    for (k, c) in config.companions.iter().enumerate() {
+        let z = super::motion::WORKING_DISTANCE_M + c.offset_m[2];
+        if !(c.offset_m.iter().all(|v| v.is_finite() && v.abs() <= 1.0) && z >= 0.25) {
+            return Err(GenerateError::Parameter(format!(
+                "companion {} offset {:?} m: each coordinate must be within 1 m and the object at least 0.25 m \
+                 from the camera",
+                k + 1,
+                c.offset_m
+            )));
+        }
+    }
     let e = &config.esim;
     if e.contrast
         .is_some_and(|c| !(c.is_finite() && c > 0.01 && c < 2.0))
@@ -186,22 +274,24 @@ pub fn generate(
     let rig = SimRig::default();
     let Built {
         mut stage,
-        name,
-        info,
-        library_object,
+        objects: scene_objects,
     } = build(config)?;
     let mut writer = RecordingWriter::create(
         out,
         rig.camera_rig(),
         &format!("hil-sim {}", env!("CARGO_PKG_VERSION")),
     )?;
-    match (&config.object, &library_object) {
-        (_, Some(o)) => {
-            objects::write_object(o, &writer.models_dir())
-                .map_err(|e| GenerateError::Parameter(e.to_string()))?;
+    for o in &scene_objects {
+        match (&o.source, &o.library_object) {
+            (_, Some(lib)) => {
+                objects::write_object(lib, &writer.models_dir())
+                    .map_err(|e| GenerateError::Parameter(e.to_string()))?;
+            }
+            (ObjectSource::File(path), None) => {
+                copy_user_obj(path, &writer.models_dir(), &o.name)?;
+            }
+            _ => {}
         }
-        (ObjectSource::File(path), None) => copy_user_obj(path, &writer.models_dir(), &name)?,
-        _ => {}
     }
 
     let schedule = TriggerSchedule::default();
@@ -273,7 +363,7 @@ pub fn generate(
     let mut depth_mm: Vec<u16> = Vec::new();
     let (mut c0, mut c1, mut p0, mut p1) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     // The step criterion uses a subsample of vertices; the changing region uses all of them.
-    let n_points = stage.object_points.len() + stage.hand_points.len();
+    let n_points = stage.point_count();
     let stride = n_points.div_ceil(400).max(1);
     let mut full0 = !stage.project(0.0, &cam, 1, &mut p0);
     let tick_times: Vec<f64> = edges
@@ -437,21 +527,23 @@ pub fn generate(
     times.dedup();
     let gt: Vec<PoseSample> = times
         .iter()
-        .map(|&t| {
-            let p = stage.trajectory.pose(t as f64 * 1e-6);
-            let q = p.rotation.into_inner();
-            PoseSample {
-                t_us: t,
-                object: name.clone(),
-                translation: [p.translation.x, p.translation.y, p.translation.z],
-                rotation_xyzw: [q.i, q.j, q.k, q.w],
-            }
+        .flat_map(|&t| {
+            stage.objects.iter().zip(&scene_objects).map(move |(o, b)| {
+                let p = o.pose(t as f64 * 1e-6);
+                let q = p.rotation.into_inner();
+                PoseSample {
+                    t_us: t,
+                    object: b.name.clone(),
+                    translation: [p.translation.x, p.translation.y, p.translation.z],
+                    rotation_xyzw: [q.i, q.j, q.k, q.w],
+                }
+            })
         })
         .collect();
     report.ground_truth_rows = gt.len() as u64;
     let mut parameters = serde_json::Map::new();
     for (k, v) in [
-        ("object", json!(name)),
+        ("object", json!(scene_objects[0].name)),
         ("motion", json!(config.motion.name())),
         ("speed", json!(config.speed.name())),
         ("seconds", json!(config.seconds)),
@@ -470,11 +562,60 @@ pub fn generate(
     ] {
         parameters.insert(k.to_string(), v);
     }
+    // Only recordings with companions carry them (a single-object recording's metadata is unchanged).
+    if !config.companions.is_empty() {
+        let companions: Vec<_> = config
+            .companions
+            .iter()
+            .zip(&scene_objects[1..])
+            .map(|(c, b)| {
+                json!({"object": b.name, "motion": c.motion.name(), "speed": c.speed.name(),
+                       "offset_m": c.offset_m})
+            })
+            .collect();
+        parameters.insert("companions".into(), json!(companions));
+    }
     let meta = RecordingMeta {
         generator: format!("hil-sim {}", env!("CARGO_PKG_VERSION")),
         trigger: schedule,
         parameters,
     };
-    writer.finish(&meta, &[info], Some(&gt))?;
+    let infos: Vec<_> = scene_objects.into_iter().map(|o| o.info).collect();
+    writer.finish(&meta, &infos, Some(&gt))?;
     Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn companion_specs_parse_with_defaults_and_name_what_is_wrong() {
+        let (m, s) = (MotionProfile::Shake, SpeedLevel::Slow);
+        let c = Companion::parse("can", 2, m, s).unwrap();
+        assert_eq!(c.object, ObjectSource::Library(ObjectKind::Can));
+        assert_eq!((c.motion, c.speed), (m, s));
+        assert_eq!(c.offset_m, [0.0, 0.0, -0.3]);
+        let c = Companion::parse("bowl:hand-switch:fast:0.05,-0.02,-0.1", 1, m, s).unwrap();
+        assert_eq!(c.object, ObjectSource::Library(ObjectKind::Bowl));
+        assert_eq!(
+            (c.motion, c.speed),
+            (MotionProfile::HandSwitch, SpeedLevel::Fast)
+        );
+        assert_eq!(c.offset_m, [0.05, -0.02, -0.1]);
+        let c = Companion::parse("parts/gear.obj:rotation", 1, m, s).unwrap();
+        assert_eq!(c.object, ObjectSource::File("parts/gear.obj".into()));
+        assert_eq!(c.motion, MotionProfile::Rotation);
+        for (spec, needle) in [
+            ("teapot", "unknown object `teapot`"),
+            ("can:wobble", "unknown motion profile `wobble`"),
+            ("can:shake:warp", "unknown speed level `warp`"),
+            ("can:shake:slow:1,2", "must be X,Y,Z"),
+            ("can:shake:slow:1,x,2", "offset `1,x,2`"),
+            ("can:shake:slow:0,0,0:more", "unexpected `:more`"),
+        ] {
+            let e = Companion::parse(spec, 1, m, s).unwrap_err();
+            assert!(e.contains(needle) && e.contains(spec), "{spec}: {e}");
+        }
+    }
 }

@@ -16,48 +16,74 @@ use tracker::render::{
     SceneObject,
 };
 
-/// Mask id of the tracked object.
-const OBJECT_ID: u16 = 1;
-/// Mask id of the hand (an occluder, not tracked).
-const HAND_ID: u16 = 2;
+/// Mask id of the hand holding object `k` (occluders, not tracked); objects take ids `1..=n`.
+const HAND_ID_BASE: u16 = 1000;
 
-/// The scene being simulated: renderer with every mesh registered, the trajectory and the props.
-pub(super) struct Stage {
-    pub(super) renderer: CpuRenderer,
-    pub(super) object: MeshId,
-    pub(super) hand: MeshId,
-    pub(super) props: Vec<(MeshId, Isometry3<f64>)>,
+/// One moving object of the scene and the hand that holds it.
+pub(super) struct StageObject {
+    pub(super) mesh: MeshId,
+    /// Its trajectory, placed by `offset` (camera frame).
     pub(super) trajectory: Trajectory,
-    pub(super) hands: bool,
+    pub(super) offset: Isometry3<f64>,
     /// Mesh vertices (object frame): a mesh's projected extremes are among its projected vertices.
-    pub(super) object_points: Vec<Point3<f64>>,
-    pub(super) hand_points: Vec<Point3<f64>>,
+    pub(super) points: Vec<Point3<f64>>,
     pub(super) half_extent: Vector3<f64>,
 }
 
+impl StageObject {
+    /// `T_cam_obj` at `t_s` seconds.
+    pub(super) fn pose(&self, t_s: f64) -> Isometry3<f64> {
+        self.offset * self.trajectory.pose(t_s)
+    }
+}
+
+/// The scene being simulated: renderer with every mesh registered, the moving objects and the props.
+pub(super) struct Stage {
+    pub(super) renderer: CpuRenderer,
+    pub(super) objects: Vec<StageObject>,
+    pub(super) hand: MeshId,
+    pub(super) props: Vec<(MeshId, Isometry3<f64>)>,
+    pub(super) hands: bool,
+    pub(super) hand_points: Vec<Point3<f64>>,
+}
+
 impl Stage {
+    /// Each object's pose at `t_s` (in `frame`) with the pose of the hand holding it, if one does.
+    fn moving(
+        &self,
+        t_s: f64,
+    ) -> impl Iterator<Item = (Isometry3<f64>, Option<Isometry3<f64>>)> + '_ {
+        self.objects.iter().map(move |o| {
+            let pose = o.pose(t_s);
+            let hand = self
+                .hands
+                .then(|| o.trajectory.holding_hand(t_s))
+                .flatten()
+                .map(|side| pose * grip(side, o.half_extent));
+            (pose, hand)
+        })
+    }
+
     pub(super) fn instances(
         &self,
         t_s: f64,
         frame: &Isometry3<f64>,
         with_props: bool,
     ) -> (Vec<SceneObject>, Vec<BackgroundMesh>) {
-        let pose = self.trajectory.pose(t_s);
-        let mut objects = vec![SceneObject {
-            mesh: self.object,
-            pose: frame * pose,
-            id: OBJECT_ID,
-        }];
-        if let Some(side) = self
-            .hands
-            .then(|| self.trajectory.holding_hand(t_s))
-            .flatten()
-        {
+        let mut objects = Vec::with_capacity(2 * self.objects.len());
+        for (k, (o, (pose, hand))) in self.objects.iter().zip(self.moving(t_s)).enumerate() {
             objects.push(SceneObject {
-                mesh: self.hand,
-                pose: frame * pose * grip(side, self.half_extent),
-                id: HAND_ID,
+                mesh: o.mesh,
+                pose: frame * pose,
+                id: k as u16 + 1,
             });
+            if let Some(hand) = hand {
+                objects.push(SceneObject {
+                    mesh: self.hand,
+                    pose: frame * hand,
+                    id: HAND_ID_BASE + k as u16,
+                });
+            }
         }
         let background = self
             .props
@@ -93,6 +119,14 @@ impl Stage {
         }
     }
 
+    /// Vertices of every moving mesh (objects and hands).
+    pub(super) fn point_count(&self) -> usize {
+        self.objects
+            .iter()
+            .map(|o| o.points.len() + self.hand_points.len())
+            .sum()
+    }
+
     /// Projects every `stride`-th vertex of the moving meshes at `t_s` into `out` (`false` if one is behind the
     /// camera).
     pub(super) fn project(
@@ -103,22 +137,15 @@ impl Stage {
         out: &mut Vec<(f64, f64)>,
     ) -> bool {
         out.clear();
-        let pose = self.trajectory.pose(t_s);
-        let hand = self
-            .hands
-            .then(|| self.trajectory.holding_hand(t_s))
-            .flatten();
-        let hand_pose = hand.map(|side| pose * grip(side, self.half_extent));
-        let sets = [
-            (Some(pose), &self.object_points),
-            (hand_pose, &self.hand_points),
-        ];
-        for (p, points) in sets {
-            let Some(p) = p else { continue };
-            for q in points.iter().step_by(stride.max(1)) {
-                match camera.project(&(p * q)) {
-                    Some(uv) => out.push((uv.x, uv.y)),
-                    None => return false,
+        for (o, (pose, hand)) in self.objects.iter().zip(self.moving(t_s)) {
+            let sets = [(Some(pose), &o.points), (hand, &self.hand_points)];
+            for (p, points) in sets {
+                let Some(p) = p else { continue };
+                for q in points.iter().step_by(stride.max(1)) {
+                    match camera.project(&(p * q)) {
+                        Some(uv) => out.push((uv.x, uv.y)),
+                        None => return false,
+                    }
                 }
             }
         }
@@ -195,18 +222,45 @@ pub(super) fn copy_user_obj(obj: &Path, models: &Path, name: &str) -> Result<(),
     Ok(())
 }
 
-/// The scene of a configuration, ready to render.
-pub(super) struct Built {
-    pub(super) stage: Stage,
+/// One object of a configuration: its name, model information and, for a library object, what to write.
+pub(super) struct BuiltObject {
     pub(super) name: String,
     pub(super) info: ModelInfo,
+    pub(super) source: ObjectSource,
     pub(super) library_object: Option<objects::ProceduralObject>,
 }
 
-pub(super) fn build(config: &GenerateConfig) -> Result<Built, GenerateError> {
-    let (name, mesh, symmetries, library_object) = match &config.object {
+/// The scene of a configuration, ready to render.
+pub(super) struct Built {
+    pub(super) stage: Stage,
+    /// In scene order (the first object, then the companions).
+    pub(super) objects: Vec<BuiltObject>,
+}
+
+/// The seed of the `k`-th object's shape, texture and trajectory (0: the configuration's own).
+fn object_seed(seed: u64, k: usize) -> u64 {
+    if k == 0 {
+        seed
+    } else {
+        seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)
+    }
+}
+
+fn object_mesh(
+    source: &ObjectSource,
+    seed: u64,
+) -> Result<
+    (
+        String,
+        Mesh,
+        Vec<Symmetry>,
+        Option<objects::ProceduralObject>,
+    ),
+    GenerateError,
+> {
+    Ok(match source {
         ObjectSource::Library(kind) => {
-            let o = objects::generate(*kind, config.seed);
+            let o = objects::generate(*kind, seed);
             let mesh = o.to_mesh()?;
             (kind.name().to_string(), mesh, o.symmetries.clone(), Some(o))
         }
@@ -231,42 +285,72 @@ pub(super) fn build(config: &GenerateConfig) -> Result<Built, GenerateError> {
                 .collect();
             (name, loaded.mesh, vec![], None)
         }
-    };
-    let info = model_info(&name, &mesh, &symmetries);
-    let object_box = mesh.aabb();
-    let hand = hand_mesh(config.seed)?;
+    })
+}
+
+pub(super) fn build(config: &GenerateConfig) -> Result<Built, GenerateError> {
     let points = |m: &Mesh| {
         m.positions()
             .iter()
             .map(|p| p.cast::<f64>())
             .collect::<Vec<Point3<f64>>>()
     };
-    let (object_points, hand_points) = (points(&mesh), points(&hand));
     let mut renderer = CpuRenderer::new();
-    let object = renderer.add_mesh(Arc::new(mesh))?;
+    let scene_objects = std::iter::once((
+        &config.object,
+        config.motion,
+        config.speed,
+        Vector3::zeros(),
+    ))
+    .chain(
+        config
+            .companions
+            .iter()
+            .map(|c| (&c.object, c.motion, c.speed, Vector3::from(c.offset_m))),
+    );
+    let mut stage_objects = Vec::new();
+    let mut built_objects: Vec<BuiltObject> = Vec::new();
+    for (k, (source, motion, speed, offset)) in scene_objects.enumerate() {
+        let seed = object_seed(config.seed, k);
+        let (name, mesh, symmetries, library_object) = object_mesh(source, seed)?;
+        if built_objects.iter().any(|b| b.name == name) {
+            return Err(GenerateError::Parameter(format!(
+                "two objects named `{name}`: the objects of a recording need distinct names"
+            )));
+        }
+        let info = model_info(&name, &mesh, &symmetries);
+        let b = mesh.aabb();
+        stage_objects.push(StageObject {
+            points: points(&mesh),
+            half_extent: (b.max - b.min) / 2.0,
+            mesh: renderer.add_mesh(Arc::new(mesh))?,
+            trajectory: Trajectory::new(motion, speed, seed),
+            offset: Isometry3::translation(offset.x, offset.y, offset.z),
+        });
+        built_objects.push(BuiltObject {
+            name,
+            info,
+            source: source.clone(),
+            library_object,
+        });
+    }
+    let hand = hand_mesh(config.seed)?;
+    let hand_points = points(&hand);
     let hand = renderer.add_mesh(Arc::new(hand))?;
     let mut props = Vec::new();
     for Prop { mesh, pose } in surroundings(config.seed)? {
         props.push((renderer.add_mesh(mesh)?, pose));
     }
-    let trajectory = Trajectory::new(config.motion, config.speed, config.seed);
-    let half_extent = (object_box.max - object_box.min) / 2.0;
     let stage = Stage {
         renderer,
-        object,
+        objects: stage_objects,
         hand,
         props,
-        trajectory,
         hands: config.hands,
-        object_points,
         hand_points,
-        half_extent,
     };
-
     Ok(Built {
         stage,
-        name,
-        info,
-        library_object,
+        objects: built_objects,
     })
 }
