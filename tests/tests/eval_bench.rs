@@ -2,7 +2,7 @@
 //! and the evaluation moving the right way as the oracle's noise grows.
 
 use drivers::recording::Recording;
-use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
+use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use tracker::eval::bench::{
@@ -106,4 +106,47 @@ fn bench_methods_on_a_short_recording() {
     let s = scores.summary(false, AucLimit::Diameter);
     // (re-normalising the parsed quaternions leaves errors of ~1e-17 m: above the zero threshold only)
     assert!(s.add_s > 99.9 && s.add > 99.9 && s.ar > 99.9, "{s:?}");
+}
+
+#[test]
+fn the_objects_of_a_recording_are_tracked_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cfg = GenerateConfig::new(
+        ObjectSource::Library(ObjectKind::Mug),
+        MotionProfile::Translation,
+        SpeedLevel::Slow,
+        0.3,
+        4,
+    );
+    cfg.companions.push(Companion {
+        object: ObjectSource::Library(ObjectKind::Can),
+        motion: MotionProfile::HandSwitch,
+        speed: SpeedLevel::Slow,
+        offset_m: Companion::default_offset(1),
+    });
+    generate(&cfg, dir.path(), |_| {}).unwrap();
+    let seq = SuiteSequence {
+        name: "mug-can".into(),
+        dir: dir.path().to_path_buf(),
+        motion: "translation".into(),
+        speed: "slow".into(),
+    };
+    let (rec, ticks) = open_sequence(&seq).unwrap();
+    let mut m = method_from_spec("eventtrack6d").unwrap();
+    let results = run_sequence(m.as_mut(), &seq, &rec, &ticks).unwrap();
+    let names: Vec<&str> = results.iter().map(|r| r.scores.object.as_str()).collect();
+    assert_eq!(names, ["can", "mug"]);
+    let held = run("static", &seq);
+    for (r, h) in results.iter().zip(&held.sequences) {
+        assert!(r.records.len() >= ticks.len() - 1, "{}", r.records.len());
+        assert!(r.records.iter().all(|p| p.object == r.scores.object));
+        // Each is followed: closer to the truth than its first pose held still.
+        let (s, h) = (
+            r.scores.summary(false, AucLimit::Diameter),
+            h.scores.summary(false, AucLimit::Diameter),
+        );
+        assert!(s.add > h.add, "{}: {s:?} against {h:?}", r.scores.object);
+    }
+    // Tracked together: one tracker run, each object charged half of it.
+    assert_eq!(results[0].seconds, results[1].seconds);
 }

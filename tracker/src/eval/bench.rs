@@ -38,6 +38,15 @@ pub trait Method {
     fn name(&self) -> &str;
     /// Tracks `input.object` over the recording and returns its poses (typically one per tick).
     fn track(&mut self, input: &MethodInput<'_>) -> Result<Vec<PoseRecord>, EvalError>;
+    /// Tracks the objects of `inputs`, all of one recording, and returns each one's poses in the same order. The
+    /// default tracks them one at a time; a method that tracks several objects together (so that they can hide
+    /// each other) overrides it.
+    fn track_together(
+        &mut self,
+        inputs: &[MethodInput<'_>],
+    ) -> Result<Vec<Vec<PoseRecord>>, EvalError> {
+        inputs.iter().map(|input| self.track(input)).collect()
+    }
     /// The parameters it runs with, as the report records them (`None`: its name says everything).
     fn parameters(&self) -> Option<serde_json::Value> {
         None
@@ -291,34 +300,53 @@ impl MethodResults {
 }
 
 /// Runs `method` over one sequence: every object with ground truth, initialised from the ground truth at the
-/// first tick only, then evaluated at every tick.
+/// first tick only, then evaluated at every tick. The objects are handed to the method together
+/// ([`Method::track_together`]); each is charged an equal share of the run time.
 pub fn run_sequence(
     method: &mut dyn Method,
     sequence: &SuiteSequence,
     recording: &Recording,
     ticks: &[Tick],
 ) -> Result<Vec<SequenceResult>, EvalError> {
-    let mut out = Vec::new();
+    let samples = recording.ground_truth.as_deref().unwrap_or(&[]);
+    let mut objects = Vec::new();
     for object in ground_truth_objects(recording)? {
-        let gt = PoseTrack::from_samples(recording.ground_truth.as_deref().unwrap_or(&[]), &object);
-        let Some(first) = ticks
+        let gt = PoseTrack::from_samples(samples, &object);
+        if let Some(first) = ticks
             .iter()
             .find_map(|t| gt.interpolated_at(t.t_us).map(|p| (t.t_us, p)))
-        else {
-            continue;
-        };
-        let input = MethodInput {
+        {
+            objects.push((object, gt, first));
+        }
+    }
+    let inputs: Vec<MethodInput<'_>> = objects
+        .iter()
+        .map(|(object, gt, first)| MethodInput {
             recording,
             ticks,
-            object: &object,
-            first_pose: first,
-            oracle: &gt,
-        };
-        let start = Instant::now();
-        let poses = method.track(&input)?;
-        let seconds = start.elapsed().as_secs_f64();
-        let track = PoseTrack::from_records(&poses, &object);
-        let scores = evaluate_object(recording, ticks, &object, &track)?;
+            object,
+            first_pose: *first,
+            oracle: gt,
+        })
+        .collect();
+    let start = Instant::now();
+    let tracked = method.track_together(&inputs)?;
+    let seconds = start.elapsed().as_secs_f64() / inputs.len().max(1) as f64;
+    if tracked.len() != inputs.len() {
+        return Err(EvalError::Model {
+            object: objects.first().map_or_else(String::new, |o| o.0.clone()),
+            reason: format!(
+                "{} tracked {} of {} objects",
+                method.name(),
+                tracked.len(),
+                inputs.len()
+            ),
+        });
+    }
+    let mut out = Vec::new();
+    for ((object, _, _), poses) in objects.iter().zip(tracked) {
+        let track = PoseTrack::from_records(&poses, object);
+        let scores = evaluate_object(recording, ticks, object, &track)?;
         out.push(SequenceResult {
             sequence: sequence.clone(),
             scores,

@@ -170,39 +170,56 @@ impl Method for TrackerMethod {
     }
 
     fn track(&mut self, input: &MethodInput<'_>) -> Result<Vec<PoseRecord>, EvalError> {
-        let rec = input.recording;
-        let (t0, gt0) = input.first_pose;
-        let first = self.init_noise.map_or(gt0, |n| n.apply(&gt0));
-        let object = recording_object(rec, input.object, t0, first)?;
-        let renderer = (self.renderer)().map_err(|reason| EvalError::Model {
-            object: input.object.into(),
-            reason: format!("renderer: {reason}"),
-        })?;
-        let mut tracker = EventTrack6d::new(
-            self.config.clone(),
-            recording_rig(rec)?,
-            vec![object],
-            renderer,
-        )
-        .map_err(|e| EvalError::Model {
-            object: input.object.into(),
-            reason: e.to_string(),
-        })?;
-        let mut out = Vec::with_capacity(input.ticks.len());
-        let name = input.object.to_string();
+        let mut tracked = self.track_together(std::slice::from_ref(input))?;
+        Ok(tracked.pop().unwrap_or_default())
+    }
+
+    /// Tracks all objects in one tracker, so that each sees the others' rendered silhouettes.
+    fn track_together(
+        &mut self,
+        inputs: &[MethodInput<'_>],
+    ) -> Result<Vec<Vec<PoseRecord>>, EvalError> {
+        let Some(first_input) = inputs.first() else {
+            return Ok(Vec::new());
+        };
+        let rec = first_input.recording;
+        let model_error = |reason: String| EvalError::Model {
+            object: first_input.object.into(),
+            reason,
+        };
+        let mut objects = Vec::with_capacity(inputs.len());
+        for input in inputs {
+            let (t0, gt0) = input.first_pose;
+            let first = self.init_noise.map_or(gt0, |n| n.apply(&gt0));
+            objects.push(recording_object(rec, input.object, t0, first)?);
+        }
+        let t0 = inputs.iter().map(|i| i.first_pose.0).min().unwrap_or(0);
+        let renderer =
+            (self.renderer)().map_err(|reason| model_error(format!("renderer: {reason}")))?;
+        let mut tracker =
+            EventTrack6d::new(self.config.clone(), recording_rig(rec)?, objects, renderer)
+                .map_err(|e| model_error(e.to_string()))?;
+        let mut out: Vec<Vec<PoseRecord>> = inputs
+            .iter()
+            .map(|i| Vec::with_capacity(i.ticks.len()))
+            .collect();
         track_recording(
             rec,
             &mut tracker,
             t0,
             |_, estimates, _| {
                 for e in estimates {
-                    out.push(PoseRecord {
-                        t_us: e.t_us,
-                        object: name.clone(),
-                        pose: e.pose,
-                        quality: f64::from(e.quality),
-                        state: e.state.as_str().into(),
-                    });
+                    if let (Some(poses), Some(input)) =
+                        (out.get_mut(e.object), inputs.get(e.object))
+                    {
+                        poses.push(PoseRecord {
+                            t_us: e.t_us,
+                            object: input.object.to_string(),
+                            pose: e.pose,
+                            quality: f64::from(e.quality),
+                            state: e.state.as_str().into(),
+                        });
+                    }
                 }
             },
             |_| {},
