@@ -199,7 +199,18 @@ fn refine_events(
     for _ in 0..rounds {
         let (roi, roi_cam) = render_roi_at(renderer, id, &pose, &mut target);
         view.extract(&target, &roi_cam, 1, &pose, 600, 200);
-        edges.collect(term, surface, &roi, target.mask(), 1, 10_000, 2_000, 400);
+        edges.collect(
+            term,
+            surface,
+            &roi,
+            target.mask(),
+            target.depth(),
+            f32::INFINITY,
+            1,
+            10_000,
+            2_000,
+            400,
+        );
         edges.associate(term, &view, &pose, &center, &cam, &motion, 0.002);
         let mut ne = NormalEquations::default();
         edges.accumulate(term, &view, &pose, &center, &cam, &mut ne);
@@ -300,7 +311,18 @@ fn outline_search_finds_a_shift_beyond_the_refinement_range() {
     let mut view = ModelView::with_capacity(600, 200);
     view.extract(&target, &roi_cam, 1, &start, 600, 200);
     let mut edges = EventEdges::default();
-    edges.collect(&term, &surface, &roi, target.mask(), 1, 10_000, 2_000, 400);
+    edges.collect(
+        &term,
+        &surface,
+        &roi,
+        target.mask(),
+        target.depth(),
+        f32::INFINITY,
+        1,
+        10_000,
+        2_000,
+        400,
+    );
     let expected = 0.025 * cam.fx / 0.5;
     let [du, dv] = edges
         .search_shift(&term, &view, &start, &cam, 40.0)
@@ -437,7 +459,18 @@ fn contrast_maximisation_recovers_the_velocity_of_a_moving_outline() {
     let mut target = RenderTarget::new();
     let (roi, _) = render_roi_at(&mut renderer, id, &pose, &mut target);
     let mut edges = EventEdges::default();
-    edges.collect(&term, &surface, &roi, target.mask(), 1, 10_000, 4_500, 400);
+    edges.collect(
+        &term,
+        &surface,
+        &roi,
+        target.mask(),
+        target.depth(),
+        f32::INFINITY,
+        1,
+        10_000,
+        4_500,
+        400,
+    );
     let center = pose * nalgebra::Point3::origin();
     edges.lift_events(
         &surface,

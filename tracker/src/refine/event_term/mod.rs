@@ -24,6 +24,7 @@ mod search;
 use super::{ModelView, NormalEquations, normal_offset};
 use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::EventSurface;
+use crate::render::MASK_EMPTY;
 use nalgebra::{Isometry3, Vector3, Vector6};
 
 /// Nearest grid index of a sample position, `floor(x + 0.5)`, without the libm call `f64::round` makes on targets
@@ -174,8 +175,11 @@ pub struct EventEdges {
 }
 
 impl EventEdges {
-    /// Bins the events of `surface` newer than `t_us - window_us` inside `roi` (the render's ROI; `mask` is the
-    /// render's mask on the same grid, `id` the object's label) and keeps the candidates outside the silhouette.
+    /// Bins the events of `surface` newer than `t_us - window_us` inside `roi` (the render's ROI; `mask` and
+    /// `depth` are the render's mask and depth on the same grid, `id` the object's label) and keeps the candidates
+    /// outside the silhouette. Events on another object's silhouette where it is nearer than `occluder_z` (metres,
+    /// typically this object's centre depth) are that occluder's and are dropped; events on an object behind are
+    /// kept, since this object's own leading edge sweeps over it.
     #[allow(clippy::too_many_arguments)]
     pub fn collect(
         &mut self,
@@ -183,6 +187,8 @@ impl EventEdges {
         surface: &EventSurface,
         roi: &Roi,
         mask: &[u16],
+        depth: &[f32],
+        occluder_z: f32,
         id: u16,
         t_us: i64,
         window_us: i64,
@@ -286,14 +292,15 @@ impl EventEdges {
                 .zip(below)
                 .map(|((a, m), b)| a + m + b);
             let cells = kept.iter_mut().zip(hits.iter().zip(counts));
-            if let Some(labels) = mask.get(row.clone()) {
-                for ((k, (&hit, count)), &label) in cells.zip(labels) {
-                    *k = (hit > 0) & (count >= min);
+            if let (Some(labels), Some(depths)) = (mask.get(row.clone()), depth.get(row.clone())) {
+                for ((k, (&hit, count)), (&label, &z)) in cells.zip(labels.iter().zip(depths)) {
+                    let occluder = (label != id) & (label != MASK_EMPTY) & (z < occluder_z);
+                    *k = (hit > 0) & (count >= min) & !occluder;
                     bins += usize::from(*k);
                     outside += usize::from(*k & (label != id));
                 }
             } else {
-                // A mask shorter than the grid: bins past its end count as off the object.
+                // A mask (or depth) shorter than the grid: bins past its end count as off the object.
                 for ((k, (&hit, count)), i) in cells.zip(row.clone()) {
                     *k = (hit > 0) & (count >= min);
                     bins += usize::from(*k);

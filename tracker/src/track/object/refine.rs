@@ -73,11 +73,15 @@ impl ObjectTrack {
             let window = ((config.event_window_px / speed) * 1e6) as i64;
             let window = window.clamp(config.min_event_window_us, config.max_event_window_us);
             window_s = window as f64 * 1e-6;
+            // Another object nearer than this one's centre hides it: its events are its own.
+            let occluder_z = self.center_at(&predicted).z as f32;
             self.edges.collect(
                 &event_term,
                 inputs.surface,
                 &roi,
                 self.target.mask(),
+                self.target.depth(),
+                occluder_z,
                 self.label,
                 inputs.t_us,
                 window,
