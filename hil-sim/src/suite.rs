@@ -1,7 +1,9 @@
 //! Fixed, named suites of sequences for benchmarking (every library object under several motion profiles and
 //! speed levels), generated once and reused.
 
-use crate::generate::{GenerateConfig, GenerateError, GenerateReport, ObjectSource, generate};
+use crate::generate::{
+    Companion, GenerateConfig, GenerateError, GenerateReport, ObjectSource, generate,
+};
 use crate::motion::{MotionProfile, SpeedLevel};
 use crate::objects::ObjectKind;
 use drivers::recording::Recording;
@@ -18,11 +20,12 @@ pub struct SuiteEntry {
 }
 
 /// Names of the suites [`suite`] knows.
-pub const SUITES: [&str; 2] = ["dev", "smoke"];
+pub const SUITES: [&str; 3] = ["dev", "smoke", "multi"];
 
 /// The sequences of a named suite: `dev` is every library object under three profiles (one slow, one
 /// moderate, one fast; the six profiles rotate across objects so each appears six times), 3 s each; `smoke`
-/// is two objects, 1 s each, for quick end-to-end checks.
+/// is two objects, 1 s each, for quick end-to-end checks; `multi` is 12 scenes of two objects each (the second
+/// on its own trajectory 15 cm nearer the camera, so they hide each other), every library object in one to three scenes, 2-3 s.
 pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
     let entry = |kind: ObjectKind,
                  motion: MotionProfile,
@@ -59,6 +62,99 @@ pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
                 2,
             ),
         ]),
+        "multi" => {
+            use MotionProfile::{DepthVariation, HandSwitch, Rotation, Shake, Translation};
+            use ObjectKind::*;
+            use SpeedLevel::{Moderate, Slow};
+            // (first object, its motion and speed, second object, its motion and speed, seconds, seed)
+            let scenes = [
+                (Mug, Translation, Slow, Can, HandSwitch, Moderate, 3.0, 4),
+                (
+                    CrackerBox,
+                    Rotation,
+                    Slow,
+                    Bottle,
+                    Translation,
+                    Moderate,
+                    3.0,
+                    6,
+                ),
+                (Bowl, Shake, Slow, Banana, HandSwitch, Slow, 3.0, 7),
+                (Drill, Translation, Moderate, Mug, Shake, Moderate, 2.0, 14),
+                (
+                    PuddingBox, Shake, Moderate, Marker, HandSwitch, Moderate, 2.0, 15,
+                ),
+                (
+                    Spatula,
+                    Rotation,
+                    Moderate,
+                    CrackerBox,
+                    Translation,
+                    Slow,
+                    2.0,
+                    16,
+                ),
+                (
+                    Hammer,
+                    Translation,
+                    Slow,
+                    Bowl,
+                    HandSwitch,
+                    Moderate,
+                    2.0,
+                    17,
+                ),
+                (
+                    Can,
+                    DepthVariation,
+                    Moderate,
+                    WineGlass,
+                    Translation,
+                    Slow,
+                    2.0,
+                    18,
+                ),
+                (
+                    Bottle, Shake, Moderate, PuddingBox, Rotation, Moderate, 2.0, 19,
+                ),
+                (
+                    Banana,
+                    Translation,
+                    Moderate,
+                    Drill,
+                    HandSwitch,
+                    Slow,
+                    2.0,
+                    20,
+                ),
+                (
+                    WineGlass,
+                    Rotation,
+                    Slow,
+                    Can,
+                    Translation,
+                    Moderate,
+                    2.0,
+                    21,
+                ),
+                (Marker, Translation, Slow, Spatula, Shake, Moderate, 2.0, 22),
+            ];
+            let out = scenes
+                .into_iter()
+                .map(|(a, am, asp, b, bm, bsp, seconds, seed)| {
+                    let mut e = entry(a, am, asp, seconds, seed);
+                    e.name = format!("{}+{}-{}-{}", e.name, b.name(), bm.name(), bsp.name());
+                    e.config.companions.push(Companion {
+                        object: ObjectSource::Library(b),
+                        motion: bm,
+                        speed: bsp,
+                        offset_m: Companion::default_offset(1),
+                    });
+                    e
+                })
+                .collect();
+            Some(out)
+        }
         _ => None,
     }
 }
@@ -74,6 +170,10 @@ fn up_to_date(dir: &Path, config: &GenerateConfig) -> bool {
         && p.get("speed") == Some(&json!(config.speed.name()))
         && p.get("seconds") == Some(&json!(config.seconds))
         && p.get("seed") == Some(&json!(config.seed))
+        && p.get("companions")
+            .and_then(|c| c.as_array())
+            .map_or(0, Vec::len)
+            == config.companions.len()
 }
 
 /// Generates (or reuses) every sequence of `entries` under `out`, and writes `out/suite.json` listing them.
@@ -143,5 +243,23 @@ mod tests {
         names.dedup();
         assert_eq!(names.len(), s.len());
         assert!(suite("nope").is_none());
+    }
+
+    #[test]
+    fn multi_suite_has_two_distinct_objects_per_scene_and_every_library_object() {
+        let s = suite("multi").unwrap();
+        assert_eq!(s.len(), 12);
+        for kind in ObjectKind::ALL {
+            let lib = ObjectSource::Library(kind);
+            let n = s
+                .iter()
+                .filter(|e| e.config.object == lib || e.config.companions[0].object == lib)
+                .count();
+            assert!((1..=3).contains(&n), "{kind:?} in {n} scenes");
+        }
+        for e in &s {
+            assert_eq!(e.config.companions.len(), 1, "{}", e.name);
+            assert_ne!(e.config.object, e.config.companions[0].object, "{}", e.name);
+        }
     }
 }
