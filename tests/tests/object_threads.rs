@@ -128,15 +128,21 @@ fn objects_stepped_on_several_threads_give_the_single_threaded_poses() {
             a.t_us
         );
     }
-    // The real mug is followed in both (the comparison above is not of two failures).
+    // The real mug is followed (the comparison above is not of two failures): on average it stays far closer to
+    // the truth than its first pose held still.
     let truth = PoseTrack::from_samples(recording.ground_truth.as_deref().unwrap(), "mug");
-    let worst = one
-        .iter()
-        .filter(|e| e.object == 0)
-        .map(|e| {
-            (e.pose.translation.vector - truth.interpolated_at(e.t_us).unwrap().translation.vector)
-                .norm()
-        })
-        .fold(0.0, f64::max);
-    assert!(worst < 0.02, "mug off by up to {worst:.3} m");
+    let held = truth.interpolated_at(one[0].t_us).unwrap();
+    let (mut tracked, mut still, mut n) = (0.0, 0.0, 0.0);
+    for e in one.iter().filter(|e| e.object == 0) {
+        let t = truth.interpolated_at(e.t_us).unwrap().translation.vector;
+        tracked += (e.pose.translation.vector - t).norm();
+        still += (held.translation.vector - t).norm();
+        n += 1.0;
+    }
+    let (tracked, still) = (tracked / n, still / n);
+    eprintln!("mean error {tracked:.4} m tracked, {still:.4} m held still");
+    assert!(
+        tracked < 0.25 * still,
+        "mean error {tracked:.3} m tracked against {still:.3} m held still"
+    );
 }
