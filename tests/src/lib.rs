@@ -1,4 +1,6 @@
 //! Shared helpers for the workspace-level end-to-end tests.
 pub mod dbc;
+/// A renderer that runs a hook before every render (counting renders, noting threads).
+pub mod render_hook;
 /// A tracker in steady state on a generated recording (tick benchmark, no-allocation test).
 pub mod tick_fixture;

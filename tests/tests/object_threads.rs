@@ -2,52 +2,18 @@
 //! poses, qualities and states are bit for bit those of the single-threaded tracker.
 
 use drivers::recording::Recording;
+use eventtrack6d_tests::render_hook::HookedRenderer;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use nalgebra::Translation3;
 use std::collections::HashSet;
 use std::sync::{Arc, Mutex};
-use std::thread::ThreadId;
 use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::geometry::PinholeCamera;
-use tracker::mesh::Mesh;
-use tracker::render::{CpuRenderer, MeshId, RenderError, RenderTarget, Renderer, Scene};
+use tracker::render::CpuRenderer;
 use tracker::track::{
     EventTrack6d, PoseEstimate, TrackerConfig, recording_object, recording_rig, track_recording,
 };
-
-/// The CPU renderer, noting which threads render through it or its forks.
-struct ThreadNotingRenderer {
-    inner: Box<dyn Renderer + Send>,
-    threads: Arc<Mutex<HashSet<ThreadId>>>,
-}
-
-impl Renderer for ThreadNotingRenderer {
-    fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
-        self.inner.add_mesh(mesh)
-    }
-
-    fn render(
-        &mut self,
-        scene: &Scene<'_>,
-        camera: &PinholeCamera,
-        target: &mut RenderTarget,
-    ) -> Result<(), RenderError> {
-        self.threads
-            .lock()
-            .unwrap()
-            .insert(std::thread::current().id());
-        self.inner.render(scene, camera, target)
-    }
-
-    fn fork(&self) -> Option<Box<dyn Renderer + Send>> {
-        Some(Box::new(Self {
-            inner: self.inner.fork()?,
-            threads: self.threads.clone(),
-        }))
-    }
-}
 
 /// Every estimate of every tick, and the most threads that rendered within one tick.
 fn run(recording: &Recording, threads: usize) -> (Vec<PoseEstimate>, usize) {
@@ -71,10 +37,11 @@ fn run(recording: &Recording, threads: usize) -> (Vec<PoseEstimate>, usize) {
     };
     config.redetect.enabled = false;
     let seen = Arc::new(Mutex::new(HashSet::new()));
-    let renderer = ThreadNotingRenderer {
-        inner: Box::new(CpuRenderer::new()),
-        threads: seen.clone(),
-    };
+    // Notes which threads render through it or its forks.
+    let noted = seen.clone();
+    let renderer = HookedRenderer::new(Box::new(CpuRenderer::new()), move || {
+        noted.lock().unwrap().insert(std::thread::current().id());
+    });
     let mut tracker = EventTrack6d::new(
         config,
         recording_rig(recording).unwrap(),

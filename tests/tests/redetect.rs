@@ -3,6 +3,7 @@
 //! where it stands; with re-detection off it stays off until the object happens to move into its ROI.
 
 use drivers::recording::Recording;
+use eventtrack6d_tests::render_hook::HookedRenderer;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
@@ -10,34 +11,10 @@ use nalgebra::{Isometry3, Translation3};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::geometry::PinholeCamera;
-use tracker::mesh::Mesh;
-use tracker::render::{CpuRenderer, MeshId, RenderError, RenderTarget, Renderer, Scene};
+use tracker::render::CpuRenderer;
 use tracker::track::{
     EventTrack6d, TrackerConfig, TrackingState, recording_object, recording_rig, track_recording,
 };
-
-/// The CPU renderer, counting its renders.
-struct CountingRenderer {
-    inner: CpuRenderer,
-    renders: Arc<AtomicUsize>,
-}
-
-impl Renderer for CountingRenderer {
-    fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
-        self.inner.add_mesh(mesh)
-    }
-
-    fn render(
-        &mut self,
-        scene: &Scene<'_>,
-        camera: &PinholeCamera,
-        target: &mut RenderTarget,
-    ) -> Result<(), RenderError> {
-        self.renders.fetch_add(1, Ordering::Relaxed);
-        self.inner.render(scene, camera, target)
-    }
-}
 
 /// What a run did: translation error (metres) and state at every tick, re-detections, and the most renders
 /// one tick made.
@@ -60,10 +37,10 @@ fn run(recording: &Recording, config: TrackerConfig) -> Run {
     start.first_pose = Translation3::new(shift, 0.0, 0.0) * pose;
     let rig = recording_rig(recording).expect("rig");
     let renders = Arc::new(AtomicUsize::new(0));
-    let renderer = CountingRenderer {
-        inner: CpuRenderer::new(),
-        renders: renders.clone(),
-    };
+    let counter = renders.clone();
+    let renderer = HookedRenderer::new(Box::new(CpuRenderer::new()), move || {
+        counter.fetch_add(1, Ordering::Relaxed);
+    });
     let mut tracker =
         EventTrack6d::new(config, rig, vec![start], Box::new(renderer)).expect("tracker");
     let mut errors = Vec::new();
