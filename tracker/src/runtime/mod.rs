@@ -12,6 +12,7 @@
 
 pub mod config;
 pub mod health;
+pub mod pulse_hold;
 pub mod queue;
 pub mod replay;
 pub mod setup;

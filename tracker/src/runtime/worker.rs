@@ -1,8 +1,9 @@
 //! The tracker thread: takes ingest in order, turns trigger edges into ticks through the trigger timeline, drives
-//! the tracker, hands every tick's estimates to each sink, and measures latency (edge decoded -> after each sink,
+//! the tracker with exactly the events up to each tick ([`PulseHold`]), hands every tick's estimates to each sink, and measures latency (edge decoded -> after each sink,
 //! and after all sinks). Steady state allocates nothing: buffers are reused and event batches recycled.
 
 use super::health::Health;
+use super::pulse_hold::PulseHold;
 use super::queue::{Ingest, IngestQueue};
 use crate::publish::{PoseSink, TickPoses};
 use crate::track::{PoseEstimate, PoseTracker};
@@ -86,6 +87,7 @@ pub struct Worker {
     tracker: Box<dyn PoseTracker>,
     sinks: Vec<Box<dyn PoseSink>>,
     timeline: TriggerTimeline,
+    hold: PulseHold,
     queue: Arc<IngestQueue>,
     health: Arc<Mutex<Health>>,
     objects: Vec<String>,
@@ -113,6 +115,7 @@ impl Worker {
             tracker,
             sinks,
             timeline: TriggerTimeline::new(timeline),
+            hold: PulseHold::new(timeline.channel),
             queue,
             health,
             sink_latency: vec![Duration::ZERO; n],
@@ -149,7 +152,7 @@ impl Worker {
             };
             match item {
                 Ingest::Events(events) => {
-                    self.tracker.push_events(&events);
+                    self.hold.events(&events, self.tracker.as_mut());
                     let n = events.len() as u64;
                     self.queue.recycle(events);
                     self.health().events += n;
@@ -161,15 +164,19 @@ impl Worker {
                 Ingest::Trigger { edge, decoded_at } => {
                     self.timeline.push(edge);
                     while let Some(tick) = self.timeline.pop_tick() {
+                        self.hold.release_until(tick.t_us, self.tracker.as_mut());
                         self.tick(&tick, decoded_at);
                     }
+                    self.hold.edge(&edge, self.tracker.as_mut());
                 }
                 Ingest::End => {
                     self.timeline.finish();
                     let now = Instant::now();
                     while let Some(tick) = self.timeline.pop_tick() {
+                        self.hold.release_until(tick.t_us, self.tracker.as_mut());
                         self.tick(&tick, now);
                     }
+                    self.hold.release_all(self.tracker.as_mut());
                     break;
                 }
             }
