@@ -122,16 +122,26 @@ fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
         max_renders_per_tick <= bound,
         "a tick rendered {max_renders_per_tick} times (bound {bound})"
     );
+    // Found: within a quarter of the mug's diameter from then on. Depth alone barely tells where the handle is,
+    // so the place found can be turned about the mug's axis (up to 90 degrees here), which shifts the box
+    // centre by up to 3 cm until the events turn it back.
     let after = &errors[*EARLY.end()..];
     let worst = after.iter().map(|(e, _)| *e).fold(0.0, f64::max);
     assert!(
-        worst < 0.02,
+        worst < 0.03,
         "after tick {}: worst translation error {worst:.3} m",
         EARLY.end()
     );
     assert!(
         after.iter().all(|(_, s)| *s != TrackingState::Lost),
         "lost after re-detection"
+    );
+    // And tracked: over the last half second the estimate is on the object.
+    let last = &errors[errors.len() - 60..];
+    let worst = last.iter().map(|(e, _)| *e).fold(0.0, f64::max);
+    assert!(
+        worst < 0.01,
+        "last 60 ticks: worst translation error {worst:.3} m"
     );
 }
 
@@ -151,4 +161,21 @@ fn a_search_checks_all_its_places_in_one_tick_only_when_asked() {
         "the whole search fit in {} renders: the bound is not exercised",
         at_once.max_renders_per_tick
     );
+}
+
+#[test]
+fn checking_places_on_several_threads_changes_nothing() {
+    let (_dir, recording) = moving_mug(0.5);
+    // All places of a search at once: three threads take a share each.
+    let mut config = TrackerConfig::default();
+    config.redetect.places_per_tick = 0;
+    config.object_threads = 1;
+    let one = run(&recording, config.clone());
+    config.object_threads = 3;
+    let three = run(&recording, config);
+    assert!(one.redetections >= 1, "no re-detection to compare");
+    assert_eq!(one.redetections, three.redetections);
+    for (tick, (a, b)) in one.errors.iter().zip(&three.errors).enumerate() {
+        assert_eq!(a, b, "tick {tick}");
+    }
 }

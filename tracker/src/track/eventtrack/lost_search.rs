@@ -3,7 +3,7 @@
 //! place tried with a depth-only refinement against that frame.
 
 use super::EventTrack6d;
-use crate::render::{RenderTarget, Scene, SceneObject};
+use super::place_check::PlaceCheck;
 use crate::track::TrackingState;
 use crate::track::config::DepthUse;
 use crate::track::object::TickInputs;
@@ -13,11 +13,11 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 /// One place to check for one object.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct PendingPlace {
-    object: usize,
+    pub(super) object: usize,
     /// Start of the depth-only refinement, `T_cam_obj`.
-    start: Isometry3<f64>,
+    pub(super) start: Isometry3<f64>,
     /// Whether this is where the tracker predicted the object (the score to beat).
-    predicted: bool,
+    pub(super) predicted: bool,
 }
 
 /// One object's search in progress.
@@ -125,9 +125,10 @@ impl EventTrack6d {
     }
 
     /// Checks up to `places_per_tick` pending places (all of them when it is 0, or for a tracker that refines only
-    /// at depth frames) against the depth frame they were
-    /// planned on; an object whose search is complete moves to its best place if that scores clearly better
-    /// than the prediction did. A search is abandoned when the object is `tracking` again.
+    /// at depth frames) against the depth frame they were planned on, split over the tracker's threads; an object
+    /// whose search is complete moves to its best place if that scores clearly better than the prediction did. A
+    /// search is abandoned when the object is `tracking` again. Every check of a tick sees the other objects where
+    /// they are predicted; the moves are made after all of them.
     pub(super) fn continue_redetection(&mut self, dt_s: f64) {
         let cfg = self.config.redetect;
         // A tracker that refines only at depth frames (`depth30`) has no ticks in between to spread over.
@@ -139,29 +140,56 @@ impl EventTrack6d {
         let Some((frame_index, frame_t_us)) = self.redetection.frame else {
             return;
         };
+        let r = &mut self.redetection;
         if frame_index != self.depth.index {
-            let r = &mut self.redetection;
             self.counters.redetect_places_dropped += r.pending.len() as u64;
             r.pending.clear();
             return;
         }
-        let mut checked = 0;
-        while checked < budget {
-            let Some(place) = self.redetection.pending.pop_front() else {
+        r.checks.clear();
+        while r.checks.len() < budget {
+            let Some(place) = r.pending.pop_front() else {
                 break;
             };
-            let k = place.object;
-            let search = &mut self.redetection.searches[k];
-            search.remaining -= 1;
-            if self.objects[k].state == TrackingState::Tracking {
+            if self.objects[place.object].state == TrackingState::Tracking {
+                r.searches[place.object].remaining -= 1;
                 continue;
             }
-            checked += 1;
-            let result = self.check_place(k, place.start, frame_t_us, dt_s);
-            let search = &mut self.redetection.searches[k];
+            r.checks.push(place);
+        }
+        if r.checks.is_empty() {
+            return;
+        }
+        r.results.clear();
+        r.results.resize(r.checks.len(), None);
+        let check = PlaceCheck {
+            objects: &self.objects,
+            scene: &self.scene,
+            camera: &self.rig.event_camera,
+            config: &self.config,
+            inputs: TickInputs {
+                t_us: frame_t_us,
+                dt_s,
+                depth: Some(&self.depth),
+                surface: &self.surface,
+                camera: &self.rig.event_camera,
+                depth_rig: &self.rig.depth,
+            },
+        };
+        self.counters.render_errors += check.run_split(
+            &r.checks,
+            &mut r.results,
+            &mut r.probes,
+            self.renderer.as_mut(),
+            &mut self.workers,
+        );
+        for (place, result) in r.checks.iter().zip(&r.results) {
+            let k = place.object;
+            let search = &mut r.searches[k];
+            search.remaining -= 1;
             if place.predicted {
                 search.here = result.map_or(0.0, |(score, _)| score);
-            } else if let Some((score, pose)) = result
+            } else if let Some((score, pose)) = *result
                 && search.best.is_none_or(|(b, _)| score > b)
             {
                 search.best = Some((score, pose));
@@ -171,67 +199,11 @@ impl EventTrack6d {
                 && score >= cfg.min_score
                 && score > search.here + cfg.margin
             {
-                self.objects[k].relocate(pose);
-                self.scene[k].pose = self.objects[k].predicted;
+                let o = &mut self.objects[k];
+                o.relocate(pose);
+                o.carry_depth_from(&self.depth, &self.rig.depth, frame_t_us, &self.config);
+                self.scene[k].pose = o.predicted;
             }
         }
-    }
-
-    /// Object `k` refined on the depth frame of `frame_t_us` alone from `start`, rendered in its own ROI with the
-    /// other objects where they are predicted: the score (fraction of model points the depth confirms x sqrt of
-    /// the silhouette's agreement with the depth at the object's range) and the refined pose. The object's
-    /// prediction and scene pose are left as they were.
-    fn check_place(
-        &mut self,
-        k: usize,
-        start: Isometry3<f64>,
-        frame_t_us: i64,
-        dt_s: f64,
-    ) -> Option<(f64, Isometry3<f64>)> {
-        let o = &mut self.objects[k];
-        let predicted = o.predicted;
-        o.predicted = start;
-        self.scene[k].pose = start;
-        let max_surface = self.config.max_surface_points;
-        let camera = &self.rig.event_camera;
-        let mut result = None;
-        if let Some(roi) = o.update_roi(camera, &self.config, frame_t_us, false) {
-            let mut render = |scene: &[SceneObject], target: &mut RenderTarget| {
-                let scene = Scene::objects(scene)
-                    .geometry_only()
-                    .normals_on_surface_grid(max_surface);
-                let ok = self
-                    .renderer
-                    .render_roi(&scene, camera, &roi, target)
-                    .is_ok();
-                self.counters.render_errors += u64::from(!ok);
-                ok
-            };
-            if render(&self.scene, &mut o.target) {
-                let inputs = TickInputs {
-                    t_us: frame_t_us,
-                    dt_s,
-                    depth: Some(&self.depth),
-                    surface: &self.surface,
-                    camera,
-                    depth_rig: &self.rig.depth,
-                };
-                if let Some((fit, pose)) = o.probe_depth(&inputs, &self.config) {
-                    // Ranked by the silhouette at the refined pose, in the same ROI.
-                    self.scene[k].pose = pose;
-                    if render(&self.scene, &mut o.target) {
-                        // Both directions: model points the depth confirms, and depth at the object's range the
-                        // model explains (a pose showing a small part of the object can fit that part perfectly).
-                        result = Some((
-                            fit * o.silhouette_agreement(&pose, &self.config).sqrt(),
-                            pose,
-                        ));
-                    }
-                }
-            }
-        }
-        o.predicted = predicted;
-        self.scene[k].pose = predicted;
-        result
     }
 }

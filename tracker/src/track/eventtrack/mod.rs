@@ -2,6 +2,7 @@
 //! its own ROI, with mutual occlusion through the other objects' rendered masks.
 
 mod lost_search;
+mod place_check;
 mod step;
 
 use super::config::{DepthUse, TrackerConfig};
@@ -9,6 +10,7 @@ use super::object::{ObjectTrack, TickInputs};
 use super::redetect::{Cluster, DepthBackground};
 use super::{PoseEstimate, PoseTracker, TrackingState};
 use lost_search::{PendingPlace, Search};
+use place_check::{PlaceResult, ProbeSet};
 use step::ObjectStep;
 
 use crate::geometry::{PinholeCamera, se3};
@@ -124,6 +126,11 @@ struct Redetection {
     frame: Option<(u64, i64)>,
     /// Per object: the search's results so far.
     searches: Vec<Search>,
+    /// The places being checked at this tick and their results.
+    checks: Vec<PendingPlace>,
+    results: Vec<PlaceResult>,
+    /// Scratch tracks for the checks, one set per renderer (thread).
+    probes: Vec<ProbeSet>,
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -204,9 +211,23 @@ impl EventTrack6d {
             0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
             n => n,
         };
-        let workers: Vec<_> = (1..threads.min(objects_len))
+        // Threads step objects and check re-detection places; a single object's places are checked on several.
+        let checks_at_once = match config.redetect {
+            r if !r.enabled => 1,
+            r if r.places_per_tick == 0 || config.depth == DepthUse::DepthFramesOnly => threads,
+            r => r.places_per_tick,
+        };
+        let workers: Vec<_> = (1..threads.min(objects_len.max(checks_at_once)))
             .map_while(|_| renderer.fork())
             .collect();
+        let probes = if config.redetect.enabled {
+            (0..=workers.len())
+                .map(|_| ProbeSet::new(&tracks, &scene, &config))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let places = objects_len * (1 + 2 * config.redetect.candidates);
         let cam = rig.event_camera;
         let depth_cam = rig.depth.camera;
         let cell = config.redetect.cell_px.max(1);
@@ -217,9 +238,12 @@ impl EventTrack6d {
             ),
             seeds: Vec::with_capacity(128),
             centres: Vec::with_capacity(config.redetect.candidates),
-            pending: VecDeque::with_capacity(objects_len * (1 + 2 * config.redetect.candidates)),
+            pending: VecDeque::with_capacity(places),
             frame: None,
             searches: vec![Search::default(); objects_len],
+            checks: Vec::with_capacity(places),
+            results: Vec::with_capacity(places),
+            probes,
         };
         Ok(Self {
             surface: EventSurface::new(cam.width, cam.height, config.intensity),

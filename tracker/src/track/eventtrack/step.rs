@@ -56,10 +56,10 @@ impl ObjectStep<'_> {
         renderer: &mut dyn Renderer,
         workers: &mut [Box<dyn Renderer + Send>],
     ) -> u64 {
-        if workers.is_empty() {
+        let per_thread = objects.len().div_ceil(workers.len() + 1);
+        if workers.is_empty() || objects.len() <= per_thread {
             return self.run(objects, renderer);
         }
-        let per_thread = objects.len().div_ceil(workers.len() + 1);
         let mut shares = objects.chunks_mut(per_thread);
         let own = shares.next().unwrap_or_default();
         std::thread::scope(|s| {

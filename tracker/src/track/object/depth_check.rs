@@ -88,10 +88,7 @@ impl ObjectTrack {
         if self.view.surface.is_empty() {
             return None;
         }
-        let c = self.center_at(&start);
-        let radius = 0.6 * config.roi_scale * self.diameter + 0.08;
-        self.carried
-            .register(frame, inputs.depth_rig, &c, radius, inputs.t_us);
+        self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
         self.carried
             .render(&start, &roi_camera, &mut self.depth_now);
         let (fit, pose, _) = self.refine_on_depth(start, &roi_camera, config);

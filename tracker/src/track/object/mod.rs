@@ -117,6 +117,38 @@ impl ObjectTrack {
         }
     }
 
+    /// A scratch track for checking places where this object might be (re-detection): the same model with buffers
+    /// of its own, so that a check leaves this track's buffers (its carried depth above all) as they were.
+    pub fn probe(&self, config: &TrackerConfig) -> Self {
+        let mut probe = Self::new(
+            self.label,
+            self.diameter,
+            self.aabb_min,
+            self.aabb_max,
+            self.pose,
+            self.t_us,
+            &[],
+            config,
+        );
+        probe.spin_axes.clone_from(&self.spin_axes);
+        probe
+    }
+
+    /// Takes over the motion state of `track`, the object this scratch track probes for (buffers untouched).
+    pub fn follow(&mut self, track: &Self) {
+        self.pose = track.pose;
+        self.t_us = track.t_us;
+        self.previous = track.previous;
+        self.velocity = track.velocity;
+        self.predicted = track.predicted;
+        self.anchor = track.anchor;
+        self.quality = track.quality;
+        self.state = track.state;
+        self.low_ticks = track.low_ticks;
+        self.depth_fit = track.depth_fit;
+        self.depth_frames_used = track.depth_frames_used;
+    }
+
     /// The object's centre in the camera frame at `pose`.
     pub fn center_at(&self, pose: &Isometry3<f64>) -> Point3<f64> {
         pose * Point3::from(self.center_obj)
@@ -190,6 +222,21 @@ impl ObjectTrack {
         self.anchor = None;
         self.low_ticks = 0;
         self.redetections += 1;
+    }
+
+    /// Takes the depth of `frame` (exposed at `t_us`) around the prediction as the depth `D_0` carried to the
+    /// following ticks (a sphere reaching past the ROI). Besides every fresh frame, a re-detection calls it: the
+    /// depth carried from the frame before showed the place the object was moved from.
+    pub fn carry_depth_from(
+        &mut self,
+        frame: &DepthFrame,
+        rig: &DepthRig,
+        t_us: i64,
+        config: &TrackerConfig,
+    ) {
+        let c = self.center_at(&self.predicted);
+        let radius = 0.6 * config.roi_scale * self.diameter + 0.08;
+        self.carried.register(frame, rig, &c, radius, t_us);
     }
 
     /// Replaces the latest estimate (see [`super::EventTrack6d::reset_pose`]).

@@ -38,10 +38,7 @@ impl ObjectTrack {
         let mut depth_weight = 0.0;
         if fresh {
             if let Some(frame) = inputs.depth {
-                let c = self.center_at(&predicted);
-                let radius = 0.6 * config.roi_scale * self.diameter + 0.08;
-                self.carried
-                    .register(frame, inputs.depth_rig, &c, radius, inputs.t_us);
+                self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
                 self.carried
                     .render(&predicted, &roi_camera, &mut self.depth_now);
                 depth_weight = 1.0;
