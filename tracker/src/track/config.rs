@@ -120,9 +120,10 @@ pub struct TrackerConfig {
     pub quality: QualityConfig,
     /// Re-detection of objects that are not `tracking`, at depth frames.
     pub redetect: RedetectConfig,
-    /// Threads that step the objects of a tick in parallel, the tracker's own included: 0 = one per available
-    /// core, 1 = all on the tracker's thread. Never more than there are objects; only renderers that can fork
-    /// (the CPU renderer) run in parallel. Poses do not depend on it.
+    /// Threads that step the objects of a tick, and check its re-detection places, in parallel, the tracker's own
+    /// included: 0 = one per available core, 1 = all on the tracker's thread. Never more than there are objects
+    /// or places checked per tick; only renderers that can fork (the CPU renderer) run in parallel. Poses do not
+    /// depend on it.
     pub object_threads: usize,
 }
 

@@ -34,9 +34,10 @@ pub struct RedetectConfig {
     /// ... and at least this high.
     pub min_score: f64,
     /// Places checked per tick, over all objects (0: all of a depth frame's at once). Each check renders twice
-    /// and refines on depth, about 1.3 ms for a 160x160 ROI on one core, so a search is spread over the ticks up
+    /// and refines on depth, 1.1-2.4 ms for a 160x160 ROI on one core, so a search is spread over the ticks up
     /// to the next depth frame to keep every tick inside its period; it keeps using the depth frame it was
-    /// planned on. `depth30`, which refines only at depth frames, checks all at once.
+    /// planned on. A tick's places are checked in parallel on the object threads. `depth30`, which refines only
+    /// at depth frames, checks all at once.
     pub places_per_tick: usize,
 }
 
