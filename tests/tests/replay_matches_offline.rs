@@ -7,7 +7,7 @@ use drivers::recording::Recording;
 use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
-use tracker::eval::parse_pose_csv;
+use tracker::eval::{PoseRow, parse_pose_csv};
 use tracker::render::RendererKind;
 use tracker::runtime::setup::recording_scene;
 use tracker::runtime::{self, Config, Hooks, build_tracker};
@@ -52,23 +52,15 @@ fn a_fast_replay_gives_the_offline_poses_exactly() {
         tracker.as_mut(),
         scene.objects[0].first_pose.0,
         |_, estimates, _| {
-            // Written as the CSV sink writes it: shortest round-trip decimal of every f64.
             offline.extend(estimates.iter().map(|e| {
-                let (t, q) = (e.pose.translation.vector, e.pose.rotation.coords);
-                format!(
-                    "{},{},{},{},{},{},{},{},{},{},{}",
-                    e.t_us,
-                    names[e.object],
-                    t.x,
-                    t.y,
-                    t.z,
-                    q.x,
-                    q.y,
-                    q.z,
-                    q.w,
-                    e.quality,
-                    e.state.as_str()
-                )
+                PoseRow {
+                    t_us: e.t_us,
+                    object: &names[e.object],
+                    pose: &e.pose,
+                    quality: e.quality,
+                    state: e.state.as_str(),
+                }
+                .to_string()
             }));
         },
         |_| {},

@@ -102,18 +102,47 @@ pub fn parse_pose_csv(text: &str) -> Result<Vec<PoseRecord>, PoseCsvError> {
     Ok(out)
 }
 
+/// One row of the tracker output CSV, without its newline, as every writer of the format writes it: numbers in
+/// Rust's shortest round-trip formatting, the quality as the tracker's `f32`.
+#[derive(Debug, Clone, Copy)]
+pub struct PoseRow<'a> {
+    /// Time, microseconds on the event camera's clock.
+    pub t_us: i64,
+    /// Object name.
+    pub object: &'a str,
+    /// `T_cam_obj`, metres.
+    pub pose: &'a Isometry3<f64>,
+    /// Quality in [0, 1].
+    pub quality: f32,
+    /// `tracking`, `degraded` or `lost`.
+    pub state: &'a str,
+}
+
+impl std::fmt::Display for PoseRow<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let t = self.pose.translation.vector;
+        let q = self.pose.rotation.coords; // (i, j, k, w)
+        write!(
+            f,
+            "{},{},{},{},{},{},{},{},{},{},{}",
+            self.t_us, self.object, t.x, t.y, t.z, q.x, q.y, q.z, q.w, self.quality, self.state
+        )
+    }
+}
+
 /// Formats rows as tracker output CSV (with header), full precision.
 pub fn format_pose_csv(records: &[PoseRecord]) -> String {
     let mut s = String::from(POSE_CSV_HEADER);
     s.push('\n');
     for r in records {
-        let t = r.pose.translation.vector;
-        let q = r.pose.rotation.coords; // (i, j, k, w)
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{}",
-            r.t_us, r.object, t.x, t.y, t.z, q.x, q.y, q.z, q.w, r.quality, r.state
-        );
+        let row = PoseRow {
+            t_us: r.t_us,
+            object: &r.object,
+            pose: &r.pose,
+            quality: r.quality as f32,
+            state: &r.state,
+        };
+        let _ = writeln!(s, "{row}");
     }
     s
 }

@@ -3,7 +3,7 @@
 //! (Rust's shortest round-trip formatting) so readers get the published `f64` values back exactly.
 
 use super::{PoseSink, PublishError, SinkCounters, TickPoses};
-use crate::eval::POSE_CSV_HEADER;
+use crate::eval::{POSE_CSV_HEADER, PoseRow};
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -56,24 +56,14 @@ impl PoseSink for CsvPoseSink {
 
     fn publish(&mut self, poses: &TickPoses<'_>) -> Result<(), PublishError> {
         for e in poses.estimates {
-            let object = poses.objects.get(e.object).map_or("?", String::as_str);
-            let t = e.pose.translation.vector;
-            let q = e.pose.rotation.coords; // (x, y, z, w)
-            let r = writeln!(
-                self.out,
-                "{},{},{},{},{},{},{},{},{},{},{}",
-                e.t_us,
-                object,
-                t.x,
-                t.y,
-                t.z,
-                q.x,
-                q.y,
-                q.z,
-                q.w,
-                e.quality,
-                e.state.as_str()
-            );
+            let row = PoseRow {
+                t_us: e.t_us,
+                object: poses.objects.get(e.object).map_or("?", String::as_str),
+                pose: &e.pose,
+                quality: e.quality,
+                state: e.state.as_str(),
+            };
+            let r = writeln!(self.out, "{row}");
             match r {
                 Ok(()) => self.counters.published += 1,
                 Err(err) => {
