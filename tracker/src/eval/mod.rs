@@ -31,8 +31,9 @@ pub use recall::{
     mspd_thresholds_px, mssd_recall, recall_over, vsd_recall, vsd_taus,
 };
 pub use sequence::{
-    EvalError, ObjectSequence, PoseTrack, Summary, evaluate_object, ground_truth_objects,
-    recording_cameras, recording_model, recording_ticks, sample_pose, summarise,
+    EvalError, ObjectSequence, PoseTrack, Summary, evaluate_object, event_from_depth,
+    ground_truth_objects, recording_cameras, recording_model, recording_ticks, rig_cameras,
+    sample_pose, summarise,
 };
 pub use symmetry::{MAX_SYM_DISC_STEP, SymmetryError, symmetries_of, symmetry_transforms};
 pub use vsd::{VsdRenderer, depth_to_distance, vsd_from_distances};

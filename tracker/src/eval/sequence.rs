@@ -8,7 +8,7 @@ use super::symmetry::{SymmetryError, symmetries_of};
 use crate::geometry::{PinholeCamera, se3};
 use crate::mesh::{MeshLoadOptions, load_obj};
 use drivers::event::{EventSink, TriggerEdge};
-use drivers::recording::{CameraIntrinsics, PoseSample, Recording, RecordingError};
+use drivers::recording::{CameraIntrinsics, CameraRig, PoseSample, Recording, RecordingError};
 use drivers::timeline::{Tick, TickIter};
 use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion};
 use std::sync::Arc;
@@ -168,21 +168,30 @@ fn camera_of(c: &CameraIntrinsics, camera: &'static str) -> Result<PinholeCamera
     })
 }
 
-/// The evaluation cameras of a recording (poses in the event camera, VSD in the depth camera).
-pub fn recording_cameras(rec: &Recording) -> Result<EvalCameras, EvalError> {
-    let m = rec.rig.t_event_depth;
+/// `T_event_depth` of a rig: maps depth-camera points (metres) into the event camera's frame.
+pub fn event_from_depth(rig: &CameraRig) -> Isometry3<f64> {
+    let m = rig.t_event_depth;
     let r = Matrix3::new(
         m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1], m[2][2],
     );
-    let t_event_depth = Isometry3::from_parts(
+    Isometry3::from_parts(
         Translation3::new(m[0][3], m[1][3], m[2][3]),
         UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)),
-    );
+    )
+}
+
+/// The evaluation cameras of a rig (poses in the event camera, VSD in the depth camera).
+pub fn rig_cameras(rig: &CameraRig) -> Result<EvalCameras, EvalError> {
     Ok(EvalCameras {
-        pose_camera: camera_of(&rec.rig.event_camera, "event camera")?,
-        depth_camera: camera_of(&rec.rig.depth_camera, "depth camera")?,
-        depth_from_pose: t_event_depth.inverse(),
+        pose_camera: camera_of(&rig.event_camera, "event camera")?,
+        depth_camera: camera_of(&rig.depth_camera, "depth camera")?,
+        depth_from_pose: event_from_depth(rig).inverse(),
     })
+}
+
+/// The evaluation cameras of a recording ([`rig_cameras`] of its rig).
+pub fn recording_cameras(rec: &Recording) -> Result<EvalCameras, EvalError> {
+    rig_cameras(&rec.rig)
 }
 
 /// The evaluation model of `object` in `rec`: its mesh, `models_info.json` diameter and symmetries.

@@ -6,20 +6,18 @@ use super::config::{Config, ObjectConfig, SourceKind};
 use super::replay::ReplaySource;
 use super::source::{Source, SourceError};
 use crate::eval::{PoseTrack, ground_truth_objects, symmetries_of};
-use crate::geometry::PinholeCamera;
 use crate::mesh::{MeshLoadOptions, load_obj};
 use crate::publish::PoseSink;
 use crate::publish::csv::CsvPoseSink;
-use crate::recon::DepthRig;
 use crate::render::{RendererKind, create_renderer};
 use crate::track::{
     EventTrack6d, HoldPoseTracker, PoseTracker, TrackedObject, TrackerConfig, TrackingMethod,
-    TrackingRig,
+    tracking_rig,
 };
 use drivers::event::{CdEvent, EventSink, TriggerEdge};
 use drivers::recording::{CameraRig, ModelInfo, Recording};
 use drivers::timeline::TimelineConfig;
-use nalgebra::{Isometry3, Matrix3, Quaternion, Rotation3, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
@@ -92,24 +90,7 @@ fn build_eventtrack6d(
     parameters: &TrackerConfig,
     scene: &TrackerScene,
 ) -> Result<EventTrack6d, RuntimeError> {
-    let camera = |c: &drivers::recording::CameraIntrinsics, what: &str| {
-        PinholeCamera::new(c.fx, c.fy, c.cx, c.cy, c.width, c.height)
-            .map_err(|e| RuntimeError::Tracker(format!("{what} intrinsics: {e}")))
-    };
-    let m = scene.rig.t_event_depth;
-    let r = Matrix3::new(
-        m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1], m[2][2],
-    );
-    let rig = TrackingRig {
-        event_camera: camera(&scene.rig.event_camera, "event camera")?,
-        depth: DepthRig {
-            camera: camera(&scene.rig.depth_camera, "depth camera")?,
-            event_from_depth: Isometry3::from_parts(
-                Translation3::new(m[0][3], m[1][3], m[2][3]),
-                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)),
-            ),
-        },
-    };
+    let rig = tracking_rig(&scene.rig).map_err(|e| RuntimeError::Tracker(e.to_string()))?;
     let mut objects = Vec::with_capacity(scene.objects.len());
     for o in &scene.objects {
         let loaded = load_obj(&o.mesh, &MeshLoadOptions::default())

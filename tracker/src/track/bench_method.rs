@@ -6,27 +6,32 @@ use super::eventtrack::{EventTrack6d, TrackedObject, TrackingRig};
 use super::offline::track_recording;
 use crate::eval::PoseRecord;
 use crate::eval::bench::{Method, MethodInput};
-use crate::eval::recording_cameras;
 use crate::eval::{EvalError, symmetries_of};
+use crate::eval::{event_from_depth, rig_cameras};
 use crate::mesh::{MeshLoadOptions, load_obj};
 use crate::recon::DepthRig;
 use crate::render::{CpuRenderer, Renderer};
-use drivers::recording::Recording;
+use drivers::recording::{CameraRig, Recording};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Arc;
 
-/// The tracking rig of a recording (event camera, depth camera, extrinsics).
-pub fn recording_rig(rec: &Recording) -> Result<TrackingRig, EvalError> {
-    let cams = recording_cameras(rec)?;
+/// The tracking rig of a camera rig description (event camera, depth camera, extrinsics).
+pub fn tracking_rig(rig: &CameraRig) -> Result<TrackingRig, EvalError> {
+    let cams = rig_cameras(rig)?;
     Ok(TrackingRig {
         event_camera: cams.pose_camera,
         depth: DepthRig {
             camera: cams.depth_camera,
-            event_from_depth: cams.depth_from_pose.inverse(),
+            event_from_depth: event_from_depth(rig),
         },
     })
+}
+
+/// The tracking rig of a recording ([`tracking_rig`] of its rig).
+pub fn recording_rig(rec: &Recording) -> Result<TrackingRig, EvalError> {
+    tracking_rig(&rec.rig)
 }
 
 /// The tracked object `name` of a recording (mesh from `models/`, diameter from `models_info.json`) with its first

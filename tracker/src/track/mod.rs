@@ -16,7 +16,7 @@ mod overlay;
 mod redetect;
 mod validate;
 
-pub use bench_method::{InitNoise, TrackerMethod, recording_object, recording_rig};
+pub use bench_method::{InitNoise, TrackerMethod, recording_object, recording_rig, tracking_rig};
 pub use config::{DepthUse, QualityConfig, TrackerConfig, TrackingMethod};
 pub use estimate::{PoseEstimate, TrackingState};
 pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, TrackingRig};
