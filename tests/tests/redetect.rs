@@ -13,7 +13,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use tracker::eval::{PoseTrack, recording_ticks};
 use tracker::render::CpuRenderer;
 use tracker::track::{
-    EventTrack6d, TrackerConfig, TrackingState, recording_object, recording_rig, track_recording,
+    EventTrack6d, PoseTracker, TrackerConfig, TrackingState, recording_object, recording_rig,
+    track_recording,
 };
 
 /// What a run did: translation error (metres) and state at every tick, re-detections, and the most renders
@@ -59,6 +60,11 @@ fn run(recording: &Recording, config: TrackerConfig) -> Run {
         |_| {},
     )
     .expect("replay");
+    // What the runtime reports (status JSON, summary) is what the tracker counted.
+    assert_eq!(
+        PoseTracker::tracker_counters(&tracker),
+        Some(tracker.counters())
+    );
     Run {
         errors,
         redetections: tracker.counters().redetections,

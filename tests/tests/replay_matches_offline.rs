@@ -67,6 +67,7 @@ fn a_fast_replay_gives_the_offline_poses_exactly() {
     )
     .unwrap();
     assert!(stats.ticks >= 50 && stats.depth_frames >= 12, "{stats:?}");
+    let offline_counters = tracker.tracker_counters().expect("the tracker counts");
 
     // Through the runtime, with small event batches so that batch edges fall everywhere.
     let out_dir = dir.path().join("out");
@@ -110,4 +111,14 @@ enabled = false
     for (r, o) in replayed.iter().zip(&offline) {
         assert_eq!(*r, o, "the replay's estimate differs from the offline one");
     }
+    // The run reports what the tracker did, and it did the same.
+    assert_eq!(summary.tracker, Some(offline_counters));
+    assert_eq!(
+        summary.status["tracker"]["depth_frames"],
+        offline_counters.depth_frames
+    );
+    assert!(summary.to_string().contains(&format!(
+        "tracker:         {} re-detections",
+        offline_counters.redetections
+    )));
 }

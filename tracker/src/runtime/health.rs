@@ -3,7 +3,7 @@
 
 use super::queue::QueueCounters;
 use crate::publish::SinkCounters;
-use crate::track::TrackingState;
+use crate::track::{TrackerCounters, TrackingState};
 use drivers::timeline::TimelineCounters;
 use serde_json::{Map, Value, json};
 use std::time::Duration;
@@ -203,6 +203,8 @@ pub struct Health {
     pub depth_frames: u64,
     /// Events handed to the tracker.
     pub events: u64,
+    /// The tracker's own counters, if it keeps any.
+    pub tracker: Option<TrackerCounters>,
 }
 
 impl Health {
@@ -238,6 +240,7 @@ impl Health {
             timeline: TimelineCounters::default(),
             depth_frames: 0,
             events: 0,
+            tracker: None,
         }
     }
 
@@ -318,6 +321,7 @@ impl Health {
                 "queue_max_batches": self.queue.max_depth,
             },
             "sinks": sinks,
+            "tracker": self.tracker,
         })
     }
 }
@@ -364,5 +368,14 @@ mod tests {
         assert_eq!(j["tick_rate_hz"], 120.0);
         assert!(j["sinks"]["csv:poses.csv"]["published"].is_u64());
         assert_eq!(h.total_drops(), 7);
+        assert!(j["tracker"].is_null());
+        h.tracker = Some(TrackerCounters {
+            redetections: 2,
+            redetect_places_dropped: 3,
+            ..TrackerCounters::default()
+        });
+        let j = h.status_json("running");
+        assert_eq!(j["tracker"]["redetections"], 2);
+        assert_eq!(j["tracker"]["redetect_places_dropped"], 3);
     }
 }

@@ -26,6 +26,7 @@ pub use setup::{OutputPaths, SceneObject, TrackerScene, build_tracker};
 pub use source::{Source, SourceError, SourceOutput, SourceStats, StopFlag};
 
 use crate::publish::{PublishError, SinkCounters};
+use crate::track::TrackerCounters;
 use drivers::recording::RecordingError;
 use drivers::timeline::TimelineCounters;
 use queue::{Ingest, IngestQueue, QueueCounters};
@@ -137,6 +138,8 @@ pub struct Summary {
     pub timeline: TimelineCounters,
     /// What the source read.
     pub source_stats: SourceStats,
+    /// The tracker's counters at the end (`None` for a tracker that keeps none).
+    pub tracker: Option<TrackerCounters>,
     /// Whether the run was stopped early (Ctrl-C or the caller).
     pub stopped: bool,
     /// File outputs.
@@ -198,6 +201,17 @@ impl std::fmt::Display for Summary {
             self.source_stats.depth_frames,
             self.source_stats.depth_missing
         )?;
+        if let Some(c) = &self.tracker {
+            writeln!(
+                f,
+                "tracker:         {} re-detections, {} depth fallbacks, {} re-detection places dropped, {} render errors, {} depth frames unused",
+                c.redetections,
+                c.depth_fallbacks,
+                c.redetect_places_dropped,
+                c.render_errors,
+                c.depth_frames_unused
+            )?;
+        }
         if !self.source_stats.anomalies.is_empty() {
             let a: Vec<String> = self
                 .source_stats
@@ -424,6 +438,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         queue: h.queue,
         timeline: h.timeline,
         source_stats,
+        tracker: h.tracker,
         stopped,
         outputs,
         status,

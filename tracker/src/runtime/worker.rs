@@ -236,6 +236,7 @@ impl Worker {
         let mut h = self.health.lock().unwrap_or_else(|p| p.into_inner());
         h.ticks += 1;
         h.poses += self.estimates.len() as u64;
+        h.tracker = self.tracker.tracker_counters();
         h.first_tick_us.get_or_insert(tick.t_us);
         h.last_tick_us = Some(tick.t_us);
         h.tick_wall_s = (now - first).as_secs_f64();

@@ -49,4 +49,9 @@ pub trait PoseTracker: Send {
     fn event_surface(&self) -> Option<&crate::recon::EventSurface> {
         None
     }
+    /// What the tracker did so far (re-detections, depth fallbacks, render errors, dropped re-detection places);
+    /// `None` if it keeps no counters.
+    fn tracker_counters(&self) -> Option<TrackerCounters> {
+        None
+    }
 }

@@ -414,6 +414,10 @@ impl PoseTracker for EventTrack6d {
         Some(&self.surface)
     }
 
+    fn tracker_counters(&self) -> Option<TrackerCounters> {
+        Some(self.counters())
+    }
+
     fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
         let o = self.objects.get(object)?;
         self.last_tick_us?;
