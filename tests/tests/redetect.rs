@@ -22,6 +22,7 @@ use tracker::track::{
 struct Run {
     errors: Vec<(f64, TrackingState)>,
     redetections: u64,
+    places_checked: u64,
     max_renders_per_tick: usize,
 }
 
@@ -68,6 +69,7 @@ fn run(recording: &Recording, config: TrackerConfig) -> Run {
     Run {
         errors,
         redetections: tracker.counters().redetections,
+        places_checked: tracker.counters().redetect_places_checked,
         max_renders_per_tick,
     }
 }
@@ -102,9 +104,10 @@ fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
     let Run {
         errors,
         redetections,
+        places_checked,
         ..
     } = run(&recording, off);
-    assert_eq!(redetections, 0);
+    assert_eq!((redetections, places_checked), (0, 0));
     let nearest = errors[EARLY]
         .iter()
         .map(|(e, _)| *e)
@@ -122,6 +125,7 @@ fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
         errors,
         redetections,
         max_renders_per_tick,
+        ..
     } = run(&recording, config);
     assert!(redetections >= 1, "no re-detection");
     assert!(
@@ -181,6 +185,8 @@ fn checking_places_on_several_threads_changes_nothing() {
     let three = run(&recording, config);
     assert!(one.redetections >= 1, "no re-detection to compare");
     assert_eq!(one.redetections, three.redetections);
+    assert!(one.places_checked > one.redetections);
+    assert_eq!(one.places_checked, three.places_checked);
     for (tick, (a, b)) in one.errors.iter().zip(&three.errors).enumerate() {
         assert_eq!(a, b, "tick {tick}");
     }

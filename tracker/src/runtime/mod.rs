@@ -204,10 +204,11 @@ impl std::fmt::Display for Summary {
         if let Some(c) = &self.tracker {
             writeln!(
                 f,
-                "tracker:         {} re-detections, {} depth fallbacks, {} re-detection places dropped, {} render errors, {} depth frames unused",
+                "tracker:         {} re-detections ({} places checked, {} dropped), {} depth fallbacks, {} render errors, {} depth frames unused",
                 c.redetections,
-                c.depth_fallbacks,
+                c.redetect_places_checked,
                 c.redetect_places_dropped,
+                c.depth_fallbacks,
                 c.render_errors,
                 c.depth_frames_unused
             )?;

@@ -201,10 +201,10 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             counters.depth_fallbacks
         );
     }
-    if counters.redetections > 0 {
+    if counters.redetections > 0 || counters.redetect_places_checked > 0 {
         eprintln!(
-            "{} depth frames re-detected an object that was not tracking (moved it to a better-fitting place)",
-            counters.redetections
+            "{} depth frames re-detected an object that was not tracking (moved it to a better-fitting place); {} places checked",
+            counters.redetections, counters.redetect_places_checked
         );
     }
     if counters.redetect_places_dropped > 0 {

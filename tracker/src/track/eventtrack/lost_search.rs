@@ -160,6 +160,7 @@ impl EventTrack6d {
         if r.checks.is_empty() {
             return;
         }
+        self.counters.redetect_places_checked += r.checks.len() as u64;
         r.results.clear();
         r.results.resize(r.checks.len(), None);
         let check = PlaceCheck {

@@ -93,6 +93,8 @@ pub struct TrackerCounters {
     pub depth_fallbacks: u64,
     /// Depth frames at which re-detection moved an object that was not `tracking` (all objects).
     pub redetections: u64,
+    /// Re-detection places checked (each a depth-only refinement and two renders).
+    pub redetect_places_checked: u64,
     /// Re-detection places left unchecked because a newer depth frame replaced the one they were planned on.
     pub redetect_places_dropped: u64,
 }
