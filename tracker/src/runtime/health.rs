@@ -371,11 +371,13 @@ mod tests {
         assert!(j["tracker"].is_null());
         h.tracker = Some(TrackerCounters {
             redetections: 2,
+            redetect_places_checked: 5,
             redetect_places_dropped: 3,
             ..TrackerCounters::default()
         });
         let j = h.status_json("running");
         assert_eq!(j["tracker"]["redetections"], 2);
+        assert_eq!(j["tracker"]["redetect_places_checked"], 5);
         assert_eq!(j["tracker"]["redetect_places_dropped"], 3);
     }
 }
