@@ -74,6 +74,10 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
+        /// Sequences generated at once, one thread each (default: one per available core). The recordings do
+        /// not depend on it; memory grows by about 150 MiB per job.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
+        jobs: Option<u32>,
     },
     /// Write pictures of a recording at the given times: accumulated events (last 5 ms, red ON, blue OFF)
     /// with the ground-truth contour in green, and the latest depth frame.
@@ -111,7 +115,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Suite { name, out } => run_suite(&name, &out),
+        Command::Suite { name, out, jobs } => run_suite(&name, &out, jobs),
         Command::Preview { dir, at, out } => {
             let out = out.unwrap_or_else(|| dir.join("preview"));
             hil_sim::preview::write_previews(&dir, &at, &out)
@@ -178,13 +182,17 @@ fn main() -> ExitCode {
     }
 }
 
-fn run_suite(name: &str, out: &std::path::Path) -> anyhow::Result<()> {
+fn run_suite(name: &str, out: &std::path::Path, jobs: Option<u32>) -> anyhow::Result<()> {
     let Some(entries) = hil_sim::suite::suite(name) else {
         anyhow::bail!(
             "unknown suite `{name}` (known: {})",
             hil_sim::suite::SUITES.join(", ")
         );
     };
+    let jobs = jobs.map_or_else(
+        || std::thread::available_parallelism().map_or(1, usize::from),
+        |j| j as usize,
+    );
     let total: f64 = entries.iter().map(|e| e.config.seconds).sum();
     let bar =
         ProgressBar::with_draw_target(Some((total * 1000.0) as u64), ProgressDrawTarget::stderr());
@@ -195,27 +203,32 @@ fn run_suite(name: &str, out: &std::path::Path) -> anyhow::Result<()> {
         .unwrap_or_else(|_| ProgressStyle::default_bar())
         .progress_chars("=> "),
     );
-    // Simulated seconds of the sequences finished so far (shared by the two callbacks).
-    let base = std::cell::Cell::new(0.0f64);
+    bar.set_message(format!("{} jobs", jobs.min(entries.len())));
+    // Simulated seconds so far of each sequence (shared by the workers' callbacks).
+    let simulated = std::sync::Mutex::new(vec![0.0f64; entries.len()]);
+    let set = |i: usize, t: f64| {
+        let mut s = simulated.lock().unwrap_or_else(|p| p.into_inner());
+        s[i] = t;
+        bar.set_position((s.iter().sum::<f64>() * 1000.0) as u64);
+    };
     let n = entries.len();
+    let mut finished = 0;
     hil_sim::suite::generate_suite(
         name,
         &entries,
         out,
+        jobs,
         |i, e, report| {
-            base.set(base.get() + e.config.seconds);
-            bar.set_position((base.get() * 1000.0) as u64);
+            set(i, e.config.seconds);
+            finished += 1;
             let what = if report.is_some() {
                 "generated"
             } else {
                 "reused"
             };
-            bar.suspend(|| eprintln!("[{}/{n}] {what} {}", i + 1, e.name));
-            if let Some(next) = entries.get(i + 1) {
-                bar.set_message(next.name.clone());
-            }
+            bar.suspend(|| eprintln!("[{finished}/{n}] {what} {}", e.name));
         },
-        |t| bar.set_position(((base.get() + t) * 1000.0) as u64),
+        set,
     )?;
     bar.finish_and_clear();
     eprintln!("suite `{name}`: {n} sequences in {}", out.display());

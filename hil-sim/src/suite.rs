@@ -176,26 +176,33 @@ fn up_to_date(dir: &Path, config: &GenerateConfig) -> bool {
             == config.companions.len()
 }
 
-/// Generates (or reuses) every sequence of `entries` under `out`, and writes `out/suite.json` listing them.
-/// `on_sequence(index, entry, report)` is called after each one (`report` is `None` when reused).
+/// Generates (or reuses) every sequence of `entries` under `out` on up to `jobs` threads (each sequence is
+/// generated whole by one thread, from its own seed, so the recordings do not depend on `jobs`), and writes
+/// `out/suite.json` listing them. `on_sequence(index, entry, report)` is called as each one finishes (`report`
+/// is `None` when reused), in the order they finish; `progress(index, simulated_s)` reports how far the
+/// sequence `index` has got. After the first failure no further sequence is started, and that error is returned.
 pub fn generate_suite(
     name: &str,
     entries: &[SuiteEntry],
     out: &Path,
-    mut on_sequence: impl FnMut(usize, &SuiteEntry, Option<&GenerateReport>),
-    mut progress: impl FnMut(f64),
+    jobs: usize,
+    mut on_sequence: impl FnMut(usize, &SuiteEntry, Option<&GenerateReport>) + Send,
+    progress: impl Fn(usize, f64) + Sync,
 ) -> Result<Vec<PathBuf>, GenerateError> {
-    let mut dirs = Vec::new();
-    for (i, e) in entries.iter().enumerate() {
-        let dir = out.join(&e.name);
-        if up_to_date(&dir, &e.config) {
-            on_sequence(i, e, None);
-        } else {
-            let report = generate(&e.config, &dir, &mut progress)?;
-            on_sequence(i, e, Some(&report));
-        }
-        dirs.push(dir);
-    }
+    let dirs: Vec<PathBuf> = entries.iter().map(|e| out.join(&e.name)).collect();
+    for_each_parallel(
+        entries.len(),
+        jobs,
+        |i| {
+            let (e, dir) = (&entries[i], &dirs[i]);
+            if up_to_date(dir, &e.config) {
+                Ok(None)
+            } else {
+                generate(&e.config, dir, |t| progress(i, t)).map(Some)
+            }
+        },
+        |i, report| on_sequence(i, &entries[i], report.as_ref()),
+    )?;
     let list: Vec<_> = entries
         .iter()
         .map(|e| {
@@ -212,6 +219,56 @@ pub fn generate_suite(
         .unwrap_or_default();
     std::fs::write(&path, text).map_err(|error| GenerateError::Io { path, error })?;
     Ok(dirs)
+}
+
+/// Runs `work(i)` for every `i` in `0..n` on up to `jobs` threads (at least one), taking indices in order, and
+/// hands each result to `done(i, result)` on the thread that produced it, one call at a time. Once a `work` call
+/// fails no further index is started; the error of the lowest failed index is returned.
+fn for_each_parallel<T, E: Send>(
+    n: usize,
+    jobs: usize,
+    work: impl Fn(usize) -> Result<T, E> + Sync,
+    done: impl FnMut(usize, T) + Send,
+) -> Result<(), E> {
+    use std::sync::Mutex;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    let next = AtomicUsize::new(0);
+    let failed = AtomicBool::new(false);
+    let done = Mutex::new(done);
+    let errors: Mutex<Vec<(usize, E)>> = Mutex::new(Vec::new());
+    let worker = || {
+        while !failed.load(Ordering::SeqCst) {
+            let i = next.fetch_add(1, Ordering::SeqCst);
+            if i >= n {
+                break;
+            }
+            match work(i) {
+                Ok(v) => {
+                    let mut done = done.lock().unwrap_or_else(|p| p.into_inner());
+                    (*done)(i, v);
+                }
+                Err(e) => {
+                    failed.store(true, Ordering::SeqCst);
+                    errors
+                        .lock()
+                        .unwrap_or_else(|p| p.into_inner())
+                        .push((i, e));
+                }
+            }
+        }
+    };
+    std::thread::scope(|scope| {
+        for _ in 1..jobs.clamp(1, n.max(1)) {
+            scope.spawn(worker);
+        }
+        worker();
+    });
+    let mut errors = errors.into_inner().unwrap_or_else(|p| p.into_inner());
+    errors.sort_by_key(|(i, _)| *i);
+    match errors.into_iter().next() {
+        Some((_, e)) => Err(e),
+        None => Ok(()),
+    }
 }
 
 #[cfg(test)]
@@ -260,6 +317,56 @@ mod tests {
         for e in &s {
             assert_eq!(e.config.companions.len(), 1, "{}", e.name);
             assert_ne!(e.config.object, e.config.companions[0].object, "{}", e.name);
+        }
+    }
+
+    #[test]
+    fn parallel_runs_do_every_index_once_whatever_the_thread_count() {
+        for jobs in [0, 1, 2, 5, 64] {
+            let mut seen = Vec::new();
+            for_each_parallel(
+                17,
+                jobs,
+                |i| Ok::<_, ()>(i * i),
+                |i, v| {
+                    assert_eq!(v, i * i);
+                    seen.push(i);
+                },
+            )
+            .unwrap();
+            seen.sort_unstable();
+            assert_eq!(seen, (0..17).collect::<Vec<_>>(), "jobs {jobs}");
+        }
+        let mut calls = 0;
+        for_each_parallel(0, 4, |_| Ok::<_, ()>(()), |_, _| calls += 1).unwrap();
+        assert_eq!(calls, 0);
+    }
+
+    #[test]
+    fn parallel_runs_stop_starting_work_after_a_failure_and_return_it() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        for jobs in [1, 3] {
+            let started = AtomicUsize::new(0);
+            let r = for_each_parallel(
+                100,
+                jobs,
+                |i| {
+                    started.fetch_add(1, Ordering::SeqCst);
+                    if i == 4 {
+                        return Err(format!("index {i}"));
+                    }
+                    std::thread::sleep(std::time::Duration::from_millis(5));
+                    Ok(())
+                },
+                |_, _| {},
+            );
+            assert_eq!(r, Err("index 4".to_string()), "jobs {jobs}");
+            let started = started.load(Ordering::SeqCst);
+            if jobs == 1 {
+                assert_eq!(started, 5);
+            } else {
+                assert!(started < 100, "jobs {jobs}: all {started} started");
+            }
         }
     }
 }
