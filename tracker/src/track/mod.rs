@@ -9,6 +9,7 @@ mod bench_method;
 mod config;
 mod estimate;
 mod eventtrack;
+mod fallback_check;
 mod hold;
 mod object;
 mod offline;
@@ -20,6 +21,9 @@ pub use bench_method::{InitNoise, TrackerMethod, recording_object, recording_rig
 pub use config::{DepthUse, QualityConfig, TrackerConfig, TrackingMethod};
 pub use estimate::{PoseEstimate, TrackingState};
 pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, TrackingRig};
+pub use fallback_check::{
+    DepthFallbackCheck, FALLBACK_TRACE_HEADER, FallbackCandidate, FallbackStart,
+};
 pub use hold::HoldPoseTracker;
 pub use offline::{OfflineStats, track_recording};
 pub use overlay::{OverlayRenderer, OverlayWriter, overlay_strip};
@@ -53,5 +57,10 @@ pub trait PoseTracker: Send {
     /// `None` if it keeps no counters.
     fn tracker_counters(&self) -> Option<TrackerCounters> {
         None
+    }
+    /// Appends to `out` the depth safety-net checks of the latest tick, one per object that ran one (at fresh
+    /// depth frames); nothing if the tracker has no safety net.
+    fn depth_fallback_checks(&self, out: &mut Vec<DepthFallbackCheck>) {
+        let _ = out;
     }
 }

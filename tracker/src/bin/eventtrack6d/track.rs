@@ -9,8 +9,8 @@ use std::time::Instant;
 use tracker::eval::{PoseRecord, PoseTrack, format_pose_csv, ground_truth_objects, parse_pose_csv};
 use tracker::render::{Renderer, RendererKind, create_renderer};
 use tracker::track::{
-    EventTrack6d, InitNoise, OverlayRenderer, OverlayWriter, TrackerConfig, TrackingMethod,
-    recording_object, recording_rig, track_recording,
+    DepthFallbackCheck, EventTrack6d, FALLBACK_TRACE_HEADER, InitNoise, OverlayRenderer,
+    OverlayWriter, TrackerConfig, TrackingMethod, recording_object, recording_rig, track_recording,
 };
 
 /// Track the objects of a recording from their first pose on: every 120 Hz tick gets a pose per object, written
@@ -50,6 +50,11 @@ pub struct TrackArgs {
     /// Draw an overlay every N ticks (120 Hz ticks; 12 = 10 per second).
     #[arg(long, default_value_t = 12, value_name = "N")]
     pub overlay_every: u64,
+    /// Also write the depth safety net's decisions as CSV: at every fresh depth frame and object, one row per
+    /// depth-only candidate (where its refinement started, its pose, the fraction of model points the depth
+    /// confirms for it and for the event-driven estimate, and whether it replaced the estimate).
+    #[arg(long, value_name = "CSV")]
+    pub fallback_trace: Option<PathBuf>,
 }
 
 /// Tracker parameters from a `--params` TOML file (the `[tracker]` table's keys at top level), validated; the
@@ -150,6 +155,11 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         &format!("{} {}", method.name(), args.recording.display()),
     );
     let mut out = Vec::new();
+    let mut trace = args
+        .fallback_trace
+        .as_ref()
+        .map(|_| format!("{FALLBACK_TRACE_HEADER}\n"));
+    let mut checks: Vec<DepthFallbackCheck> = Vec::with_capacity(names.len());
     let mut overlay_error = None;
     let started = Instant::now();
     let stats = track_recording(
@@ -166,6 +176,13 @@ pub fn run(args: &TrackArgs) -> Result<()> {
                     state: e.state.as_str().into(),
                 });
             }
+            if let Some(trace) = trace.as_mut() {
+                checks.clear();
+                t.depth_fallback_checks(&mut checks);
+                for c in &checks {
+                    c.write_csv_rows(&names[c.object], trace);
+                }
+            }
             if let (Some(w), Some(surface)) = (overlay.as_mut(), t.event_surface())
                 && overlay_error.is_none()
             {
@@ -181,6 +198,9 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     }
     std::fs::write(&args.out, format_pose_csv(&out))
         .with_context(|| format!("writing {}", args.out.display()))?;
+    if let (Some(path), Some(trace)) = (&args.fallback_trace, &trace) {
+        std::fs::write(path, trace).with_context(|| format!("writing {}", path.display()))?;
+    }
     let counters = tracker.counters();
     eprintln!(
         "{}: {} ticks, {} objects, {} events, {} depth frames ({} missing) in {:.2} s ({:.1} ticks/s); {} poses -> {}",
@@ -222,6 +242,9 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     let lost = out.iter().filter(|r| r.state == "lost").count();
     if lost > 0 {
         eprintln!("warning: {lost} poses reported `lost`");
+    }
+    if let Some(path) = &args.fallback_trace {
+        eprintln!("depth safety-net decisions -> {}", path.display());
     }
     if let Some(w) = &overlay {
         eprintln!(

@@ -8,7 +8,7 @@ mod step;
 use super::config::{DepthUse, TrackerConfig};
 use super::object::{ObjectTrack, TickInputs};
 use super::redetect::{Cluster, DepthBackground};
-use super::{PoseEstimate, PoseTracker, TrackingState};
+use super::{DepthFallbackCheck, PoseEstimate, PoseTracker, TrackingState};
 use lost_search::{PendingPlace, Search};
 use place_check::{PlaceResult, ProbeSet};
 use step::ObjectStep;
@@ -418,6 +418,17 @@ impl PoseTracker for EventTrack6d {
 
     fn tracker_counters(&self) -> Option<TrackerCounters> {
         Some(self.counters())
+    }
+
+    fn depth_fallback_checks(&self, out: &mut Vec<DepthFallbackCheck>) {
+        // A check is the latest tick's only if the object refined at that tick.
+        let latest = self.last_tick_us;
+        out.extend(
+            self.objects
+                .iter()
+                .filter_map(|o| o.fallback_check)
+                .filter(|c| Some(c.t_us) == latest),
+        );
     }
 
     fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {

@@ -5,6 +5,7 @@ mod refine;
 
 use super::config::TrackerConfig;
 use super::estimate::TrackingState;
+use super::fallback_check::DepthFallbackCheck;
 use crate::geometry::{PinholeCamera, Roi};
 use crate::mesh::Symmetry;
 use crate::recon::{CarriedDepth, DepthImage, DepthRig, EventSurface};
@@ -42,6 +43,8 @@ pub(crate) struct ObjectTrack {
     pub fallbacks: u64,
     /// Depth frames at which re-detection moved the object.
     pub redetections: u64,
+    /// The safety-net check of the latest refinement; `None` if that tick ran none.
+    pub fallback_check: Option<DepthFallbackCheck>,
     depth_fit: f64,
     depth_frames_used: u32,
     pub roi: Option<Roi>,
@@ -100,6 +103,7 @@ impl ObjectTrack {
             state: TrackingState::Tracking,
             low_ticks: 0,
             fallbacks: 0,
+            fallback_check: None,
             redetections: 0,
             depth_fit: 1.0,
             depth_frames_used: 0,

@@ -7,12 +7,14 @@ use crate::refine::{
 };
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::estimate::TrackingState;
+use crate::track::fallback_check::{DepthFallbackCheck, FallbackCandidate, FallbackStart};
 use nalgebra::{Isometry3, Translation3, Vector3, Vector6};
 
 impl ObjectTrack {
     /// Refines the predicted pose at this tick from the render already in `self.target` (made at the predicted
     /// poses of all objects) and updates quality, state and velocity.
     pub fn refine(&mut self, inputs: &TickInputs<'_>, config: &TrackerConfig) {
+        self.fallback_check = None;
         let Some(roi) = self.roi else {
             self.finish(inputs, self.predicted, None, None, config);
             return;
@@ -248,29 +250,46 @@ impl ObjectTrack {
             // measured between depth frames (neither depends on what the events did since).
             let span = (inputs.t_us - t_anchor).max(0) as f64 * 1e-6;
             let starts = [
-                Some(anchor),
-                config
-                    .depth_fallback_extrapolate
-                    .then(|| apply_step(&anchor, &self.center_obj, &(self.velocity * span))),
+                Some((FallbackStart::PreviousDepthPose, anchor)),
+                config.depth_fallback_extrapolate.then(|| {
+                    let start = apply_step(&anchor, &self.center_obj, &(self.velocity * span));
+                    (FallbackStart::Extrapolated, start)
+                }),
             ];
-            let mut best: Option<(f64, Isometry3<f64>, DepthTermStats)> = None;
-            for start in starts.into_iter().flatten() {
-                let candidate = self.refine_on_depth(start, &roi_camera, config);
-                if best.is_none_or(|(b, _, _)| candidate.0 > b) {
-                    best = Some(candidate);
+            let (main_fit, main_stats) = self.depth_fit_at(&pose, &roi_camera, config);
+            let mut check = DepthFallbackCheck {
+                object: usize::from(self.label) - 1,
+                t_us: inputs.t_us,
+                estimate: pose,
+                estimate_agreeing: main_fit,
+                candidates: [None; 2],
+                replaced_by: None,
+            };
+            let mut best: Option<(usize, f64, Isometry3<f64>, DepthTermStats)> = None;
+            for (k, start) in starts.into_iter().enumerate() {
+                let Some((kind, from)) = start else { continue };
+                let (fit, refined, stats) = self.refine_on_depth(from, &roi_camera, config);
+                check.candidates[k] = Some(FallbackCandidate {
+                    start: kind,
+                    pose: refined,
+                    agreeing: fit,
+                });
+                if best.is_none_or(|(_, b, _, _)| fit > b) {
+                    best = Some((k, fit, refined, stats));
                 }
             }
-            let (main_fit, main_stats) = self.depth_fit_at(&pose, &roi_camera, config);
             match best {
-                Some((fallback_fit, fallback, fallback_stats))
+                Some((k, fallback_fit, fallback, fallback_stats))
                     if fallback_fit > main_fit + config.depth_fallback_margin =>
                 {
                     pose = fallback;
                     depth_stats = Some(fallback_stats);
                     self.fallbacks += 1;
+                    check.replaced_by = Some(k);
                 }
                 _ => depth_stats = Some(main_stats),
             }
+            self.fallback_check = Some(check);
         }
         if fresh {
             self.depth_frames_used += 1;

@@ -1,0 +1,141 @@
+//! The depth safety net's decision record (`PoseTracker::depth_fallback_checks`, written by `eventtrack6d track
+//! --fallback-trace`) says what the tracker did: one check per object at each fresh depth frame after the first,
+//! a replacement exactly when a candidate beat the estimate by the margin, the published pose is then that
+//! candidate's, and the replacements add up to the tracker's counter.
+
+use drivers::recording::Recording;
+use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
+use hil_sim::motion::{MotionProfile, SpeedLevel};
+use hil_sim::objects::ObjectKind;
+use tracker::eval::{PoseTrack, recording_ticks};
+use tracker::render::CpuRenderer;
+use tracker::track::{
+    DepthFallbackCheck, EventTrack6d, TrackerConfig, recording_object, recording_rig,
+    track_recording,
+};
+
+/// A marker held in a hand, translating at moderate speed for 1 s (seed 1031, the dev suite's marker
+/// translation moderate): its safety net replaces the estimate several times, rightly and wrongly.
+fn moving_marker() -> (tempfile::TempDir, Recording) {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = GenerateConfig::new(
+        ObjectSource::Library(ObjectKind::Marker),
+        MotionProfile::Translation,
+        SpeedLevel::Moderate,
+        1.0,
+        1031,
+    );
+    generate(&cfg, dir.path(), |_| {}).expect("generating the recording");
+    let recording = Recording::open(dir.path()).expect("recording");
+    (dir, recording)
+}
+
+#[test]
+fn the_fallback_record_matches_what_the_tracker_published() {
+    let (_dir, recording) = moving_marker();
+    let gt = recording.ground_truth.clone().expect("ground truth");
+    let truth = PoseTrack::from_samples(&gt, "marker");
+    let ticks = recording_ticks(&recording).expect("ticks");
+    let first = ticks[0].t_us;
+    let pose = truth.interpolated_at(first).expect("first pose");
+    let object = recording_object(&recording, "marker", first, pose).expect("model");
+    let rig = recording_rig(&recording).expect("rig");
+    let config = TrackerConfig::default();
+    let margin = config.depth_fallback_margin;
+    let mut tracker = EventTrack6d::new(config, rig, vec![object], Box::new(CpuRenderer::new()))
+        .expect("tracker");
+
+    let mut checks = Vec::new();
+    let mut ticks_with_check = Vec::new();
+    let mut depth_ticks = 0usize;
+    let mut replaced = 0u64;
+    let mut kept = 0u64;
+    track_recording(
+        &recording,
+        &mut tracker,
+        first,
+        |tick, estimates, t| {
+            depth_ticks += usize::from(tick.depth_frame.is_some());
+            checks.clear();
+            t.depth_fallback_checks(&mut checks);
+            if tick.depth_frame.is_some() {
+                // The first depth frame has no earlier one to start a candidate from.
+                assert!(
+                    checks.len() <= 1,
+                    "tick {}: {} checks",
+                    tick.index,
+                    checks.len()
+                );
+            } else {
+                assert!(checks.is_empty(), "tick {} has no depth frame", tick.index);
+            }
+            for c in &checks {
+                ticks_with_check.push(tick.index);
+                assert_eq!(c.t_us, tick.t_us);
+                assert_eq!(c.object, 0);
+                check_decision(c, margin, &estimates[0].pose);
+                match c.replaced_by {
+                    Some(_) => replaced += 1,
+                    None => kept += 1,
+                }
+            }
+        },
+        |_| {},
+    )
+    .expect("tracking");
+
+    // Every depth frame but the first is checked.
+    assert!(depth_ticks >= 25, "{depth_ticks} depth frames in 1 s");
+    assert_eq!(ticks_with_check.len(), depth_ticks - 1);
+    assert_eq!(replaced, tracker.counters().depth_fallbacks);
+    // The sequence exercises both outcomes.
+    assert!(
+        replaced >= 1 && kept >= 1,
+        "replaced {replaced}, kept {kept}"
+    );
+}
+
+/// One check is consistent with the rule and with the published pose.
+fn check_decision(c: &DepthFallbackCheck, margin: f64, published: &nalgebra::Isometry3<f64>) {
+    assert!((0.0..=1.0).contains(&c.estimate_agreeing));
+    let candidates: Vec<_> = c.candidates.iter().flatten().collect();
+    assert!(!candidates.is_empty(), "a check without candidates");
+    for cand in &candidates {
+        assert!((0.0..=1.0).contains(&cand.agreeing));
+    }
+    let best = candidates
+        .iter()
+        .map(|cand| cand.agreeing)
+        .fold(f64::NEG_INFINITY, f64::max);
+    let gap = |a: &nalgebra::Isometry3<f64>, b: &nalgebra::Isometry3<f64>| {
+        (a.translation.vector - b.translation.vector).norm() + a.rotation.angle_to(&b.rotation)
+    };
+    match c.replaced_by {
+        Some(k) => {
+            let winner = c.candidates[k].expect("the replacing candidate is recorded");
+            assert_eq!(
+                winner.agreeing, best,
+                "t {}: not the best candidate",
+                c.t_us
+            );
+            assert!(winner.agreeing > c.estimate_agreeing + margin);
+            assert!(
+                gap(&winner.pose, published) < 1e-6,
+                "t {}: published pose is not the replacing candidate's",
+                c.t_us
+            );
+        }
+        None => {
+            assert!(
+                best <= c.estimate_agreeing + margin,
+                "t {}: a better candidate was ignored",
+                c.t_us
+            );
+            assert!(
+                gap(&c.estimate, published) < 1e-6,
+                "t {}: published pose is not the kept estimate",
+                c.t_us
+            );
+        }
+    }
+}

@@ -1,0 +1,154 @@
+//! The depth safety net's decisions, as a record a user can write out (`eventtrack6d track --fallback-trace`):
+//! at every fresh depth frame, the event-driven estimate, the depth-only candidates that could replace it, how
+//! many model points the depth image confirms for each, and which one the tracker kept.
+
+use nalgebra::Isometry3;
+use std::fmt::Write as _;
+
+/// Where a depth-only candidate's refinement started.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FallbackStart {
+    /// The estimate at the previous depth frame.
+    PreviousDepthPose,
+    /// The estimate at the previous depth frame carried on at the velocity measured between depth frames.
+    Extrapolated,
+}
+
+impl FallbackStart {
+    /// Name in the trace CSV (`previous`, `extrapolated`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::PreviousDepthPose => "previous",
+            Self::Extrapolated => "extrapolated",
+        }
+    }
+}
+
+/// One depth-only candidate of a safety-net check.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FallbackCandidate {
+    /// Where its refinement started.
+    pub start: FallbackStart,
+    /// The refined pose, `T_cam_obj` (event camera frame), metres.
+    pub pose: Isometry3<f64>,
+    /// Fraction of the model's visible points the depth image confirms at `pose`, in [0, 1].
+    pub agreeing: f64,
+}
+
+/// One object's safety-net check at one fresh depth frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DepthFallbackCheck {
+    /// Index of the object (as in [`super::PoseEstimate::object`]).
+    pub object: usize,
+    /// Tick time, microseconds on the event camera's clock.
+    pub t_us: i64,
+    /// The event-driven estimate before the check, `T_cam_obj`, metres.
+    pub estimate: Isometry3<f64>,
+    /// Fraction of the model's visible points the depth image confirms at `estimate`, in [0, 1].
+    pub estimate_agreeing: f64,
+    /// The candidates, in the order they were refined (`None`: that start is not configured).
+    pub candidates: [Option<FallbackCandidate>; 2],
+    /// Index into `candidates` of the one that replaced the estimate; `None` if the estimate was kept.
+    pub replaced_by: Option<usize>,
+}
+
+/// Header of the fallback trace CSV.
+pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced";
+
+impl DepthFallbackCheck {
+    /// Appends one CSV row per candidate (columns of [`FALLBACK_TRACE_HEADER`]) to `out`; `name` is the object's
+    /// name. Positions are the translations of the poses, metres; `rotation_to_estimate_deg` is the angle between
+    /// the candidate's and the estimate's orientation.
+    pub fn write_csv_rows(&self, name: &str, out: &mut String) {
+        let e = self.estimate.translation.vector;
+        for (k, c) in self.candidates.iter().enumerate() {
+            let Some(c) = c else { continue };
+            let p = c.pose.translation.vector;
+            let angle = c
+                .pose
+                .rotation
+                .angle_to(&self.estimate.rotation)
+                .to_degrees();
+            // Writing into a String cannot fail.
+            let _ = writeln!(
+                out,
+                "{},{},{:.6},{:.6},{:.6},{:.4},{},{:.6},{:.6},{:.6},{:.4},{:.3},{}",
+                self.t_us,
+                name,
+                e.x,
+                e.y,
+                e.z,
+                self.estimate_agreeing,
+                c.start.as_str(),
+                p.x,
+                p.y,
+                p.z,
+                c.agreeing,
+                angle,
+                u8::from(self.replaced_by == Some(k)),
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Translation3, UnitQuaternion, Vector3};
+
+    #[test]
+    fn one_row_per_candidate_and_only_the_replacing_one_is_marked() {
+        let estimate = Isometry3::from_parts(
+            Translation3::new(0.1, -0.02, 0.6),
+            UnitQuaternion::identity(),
+        );
+        let turned = Isometry3::from_parts(
+            Translation3::new(0.12, -0.02, 0.61),
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 10f64.to_radians()),
+        );
+        let check = DepthFallbackCheck {
+            object: 0,
+            t_us: 33_833,
+            estimate,
+            estimate_agreeing: 0.35,
+            candidates: [
+                Some(FallbackCandidate {
+                    start: FallbackStart::PreviousDepthPose,
+                    pose: turned,
+                    agreeing: 0.52,
+                }),
+                None,
+            ],
+            replaced_by: Some(0),
+        };
+        let mut out = String::new();
+        check.write_csv_rows("marker", &mut out);
+        let rows: Vec<&str> = out.lines().collect();
+        assert_eq!(rows.len(), 1);
+        let cols: Vec<&str> = rows[0].split(',').collect();
+        assert_eq!(cols.len(), FALLBACK_TRACE_HEADER.split(',').count());
+        assert_eq!(&cols[..2], &["33833", "marker"]);
+        assert_eq!(cols[6], "previous");
+        assert_eq!(cols[7], "0.120000");
+        assert_eq!(cols[11], "10.000");
+        assert_eq!(cols[12], "1");
+
+        let kept = DepthFallbackCheck {
+            replaced_by: None,
+            candidates: [
+                check.candidates[0],
+                Some(FallbackCandidate {
+                    start: FallbackStart::Extrapolated,
+                    pose: estimate,
+                    agreeing: 0.33,
+                }),
+            ],
+            ..check
+        };
+        let mut out = String::new();
+        kept.write_csv_rows("marker", &mut out);
+        let replaced: Vec<&str> = out.lines().map(|l| l.rsplit(',').next().unwrap()).collect();
+        assert_eq!(replaced, ["0", "0"]);
+        assert!(out.lines().nth(1).unwrap().contains(",extrapolated,"));
+    }
+}
