@@ -65,10 +65,11 @@ enum Command {
     },
     /// Generate (or reuse, when already there with the same parameters) a fixed named suite of recordings:
     /// `dev` (every library object x three motion profiles at slow, moderate and fast speed, 3 s each),
-    /// `smoke` (two short sequences) or `multi` (12 scenes of two objects that hide each other, 2-3 s each).
+    /// `holdout` (the same shape, other seeds, each object under other motion-speed pairs), `smoke` (two short
+    /// sequences) or `multi` (12 scenes of two objects that hide each other, 2-3 s each).
     /// Writes DIR/<sequence>/ and DIR/suite.json.
     Suite {
-        /// Suite name: dev, smoke or multi (two objects per scene).
+        /// Suite name: dev, holdout (dev's shape, other seeds and pairings), smoke or multi (two objects per scene).
         #[arg(long, default_value = "dev")]
         name: String,
         /// Output directory.

@@ -20,10 +20,12 @@ pub struct SuiteEntry {
 }
 
 /// Names of the suites [`suite`] knows.
-pub const SUITES: [&str; 3] = ["dev", "smoke", "multi"];
+pub const SUITES: [&str; 4] = ["dev", "holdout", "smoke", "multi"];
 
 /// The sequences of a named suite: `dev` is every library object under three profiles (one slow, one
-/// moderate, one fast; the six profiles rotate across objects so each appears six times), 3 s each; `smoke`
+/// moderate, one fast; the six profiles rotate across objects so each appears six times), 3 s each; `holdout`
+/// has the shape of `dev` with other seeds and the profiles rotated on by three, so every object meets other
+/// motion-speed pairs (for checking a change tuned on `dev` on recordings it was not tuned on); `smoke`
 /// is two objects, 1 s each, for quick end-to-end checks; `multi` is 12 scenes of two objects each (the second
 /// on its own trajectory 15 cm nearer the camera, so they hide each other), every library object in one to three scenes, 2-3 s.
 pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
@@ -36,12 +38,15 @@ pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
         config: GenerateConfig::new(ObjectSource::Library(kind), motion, speed, seconds, seed),
     };
     match name {
-        "dev" => {
+        "dev" | "holdout" => {
+            let (rotate, first_seed) = if name == "dev" { (0, 1000) } else { (3, 3000) };
             let mut out = Vec::new();
             for (i, kind) in ObjectKind::ALL.into_iter().enumerate() {
                 for (j, speed) in SpeedLevel::ALL.into_iter().enumerate() {
-                    let motion = MotionProfile::ALL[(i + 2 * j) % MotionProfile::ALL.len()];
-                    out.push(entry(kind, motion, speed, 3.0, 1000 + (i * 3 + j) as u64));
+                    let motion =
+                        MotionProfile::ALL[(i + 2 * j + rotate) % MotionProfile::ALL.len()];
+                    let seed = first_seed + (i * 3 + j) as u64;
+                    out.push(entry(kind, motion, speed, 3.0, seed));
                 }
             }
             Some(out)
@@ -276,8 +281,35 @@ mod tests {
     use super::*;
 
     #[test]
-    fn dev_suite_covers_every_object_profile_and_speed() {
-        let s = suite("dev").unwrap();
+    fn dev_and_holdout_suites_cover_every_object_profile_and_speed() {
+        for name in ["dev", "holdout"] {
+            check_covers_every_object_profile_and_speed(&suite(name).unwrap());
+        }
+        assert!(suite("nope").is_none());
+    }
+
+    #[test]
+    fn holdout_suite_shares_no_seed_and_gives_objects_other_profiles_than_dev() {
+        let (dev, holdout) = (suite("dev").unwrap(), suite("holdout").unwrap());
+        for h in &holdout {
+            assert!(
+                dev.iter().all(|d| d.config.seed != h.config.seed),
+                "{}",
+                h.name
+            );
+            let same = dev
+                .iter()
+                .find(|d| d.config.object == h.config.object && d.config.speed == h.config.speed);
+            assert_ne!(
+                same.map(|d| d.config.motion),
+                Some(h.config.motion),
+                "{}",
+                h.name
+            );
+        }
+    }
+
+    fn check_covers_every_object_profile_and_speed(s: &[SuiteEntry]) {
         assert_eq!(s.len(), ObjectKind::ALL.len() * 3);
         for kind in ObjectKind::ALL {
             let n = s
@@ -297,9 +329,9 @@ mod tests {
             );
         }
         let mut names: Vec<_> = s.iter().map(|e| &e.name).collect();
+        names.sort();
         names.dedup();
         assert_eq!(names.len(), s.len());
-        assert!(suite("nope").is_none());
     }
 
     #[test]
