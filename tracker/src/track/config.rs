@@ -1,5 +1,6 @@
 //! Tracker parameters and the method presets (`eventtrack6d`, `depth30`, `events-only`).
 
+use super::estimate::TrackingState;
 use super::redetect::RedetectConfig;
 use crate::recon::IntensityFilterConfig;
 use crate::refine::{DepthTerm, EventTerm, IntensityTerm};
@@ -29,6 +30,12 @@ pub struct QualityConfig {
     pub lost_below: f32,
     /// Consecutive low-quality ticks before `lost` is raised.
     pub lost_after_ticks: u32,
+    /// `lost` is also raised while the mean quality over the last `lost_mean_ticks` ticks is below this: a track
+    /// that stays mediocre (an estimate off the object that the data half supports) without ever dropping below
+    /// `lost_below` for long.
+    pub lost_mean_below: f32,
+    /// Length of that window, ticks (0 disables the rule; 60 is 0.5 s at 120 Hz).
+    pub lost_mean_ticks: u32,
 }
 
 impl Default for QualityConfig {
@@ -37,6 +44,24 @@ impl Default for QualityConfig {
             degraded_below: 0.5,
             lost_below: 0.2,
             lost_after_ticks: 12,
+            lost_mean_below: 0.5,
+            lost_mean_ticks: 60,
+        }
+    }
+}
+
+impl QualityConfig {
+    /// The state of an estimate of `quality`, after `low_ticks` consecutive ticks below `lost_below` (this one
+    /// included) and with `recent_mean` the mean quality over the last `lost_mean_ticks` ticks (`None` until
+    /// that many ticks have passed).
+    pub fn state(&self, quality: f32, low_ticks: u32, recent_mean: Option<f64>) -> TrackingState {
+        let mediocre = recent_mean.is_some_and(|m| m < f64::from(self.lost_mean_below));
+        if low_ticks >= self.lost_after_ticks || mediocre {
+            TrackingState::Lost
+        } else if quality < self.degraded_below {
+            TrackingState::Degraded
+        } else {
+            TrackingState::Tracking
         }
     }
 }
@@ -233,5 +258,23 @@ impl TrackingMethod {
 impl std::fmt::Display for TrackingMethod {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn state_is_lost_after_a_run_of_low_ticks_or_a_mediocre_window() {
+        let q = QualityConfig::default();
+        assert_eq!(q.state(0.9, 0, Some(0.9)), TrackingState::Tracking);
+        assert_eq!(q.state(0.3, 0, Some(0.9)), TrackingState::Degraded);
+        assert_eq!(q.state(0.1, 11, None), TrackingState::Degraded);
+        assert_eq!(q.state(0.1, 12, None), TrackingState::Lost);
+        // Never 12 low ticks in a row, but mediocre for the whole window: lost even on a good tick.
+        assert_eq!(q.state(0.9, 0, Some(0.45)), TrackingState::Lost);
+        assert_eq!(q.state(0.3, 0, Some(0.55)), TrackingState::Degraded);
+        assert_eq!(q.state(0.3, 0, None), TrackingState::Degraded);
     }
 }

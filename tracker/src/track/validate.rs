@@ -284,6 +284,18 @@ impl TrackerConfig {
             UNIT,
         )?;
         check("quality.lost_below", f64::from(q.lost_below), unit, UNIT)?;
+        check(
+            "quality.lost_mean_below",
+            f64::from(q.lost_mean_below),
+            unit,
+            UNIT,
+        )?;
+        check(
+            "quality.lost_mean_ticks",
+            f64::from(q.lost_mean_ticks),
+            |v| v <= 12_000.0,
+            "must be at most 12000 ticks (100 s at 120 Hz)",
+        )?;
         let r = &self.redetect;
         check(
             "redetect.cell_px",

@@ -1,6 +1,7 @@
 //! One tracked object's state and its per-tick refinement.
 
 mod depth_check;
+mod quality_window;
 mod refine;
 
 use super::config::TrackerConfig;
@@ -15,6 +16,7 @@ use crate::refine::{
 use crate::render::RenderTarget;
 use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3, Vector6};
+use quality_window::QualityWindow;
 
 /// A tracked object: its model, its state and the buffers its refinement reuses every tick.
 #[derive(Debug)]
@@ -39,6 +41,8 @@ pub(crate) struct ObjectTrack {
     pub quality: f32,
     pub state: TrackingState,
     low_ticks: u32,
+    /// Quality of the recent ticks (the mean-quality `lost` rule).
+    recent_quality: QualityWindow,
     /// Depth frames at which the depth-only hypothesis replaced the event-driven estimate.
     pub fallbacks: u64,
     /// Depth frames at which re-detection moved the object.
@@ -102,6 +106,7 @@ impl ObjectTrack {
             quality: 1.0,
             state: TrackingState::Tracking,
             low_ticks: 0,
+            recent_quality: QualityWindow::new(config.quality.lost_mean_ticks as usize),
             fallbacks: 0,
             fallback_check: None,
             redetections: 0,
@@ -149,6 +154,7 @@ impl ObjectTrack {
         self.quality = track.quality;
         self.state = track.state;
         self.low_ticks = track.low_ticks;
+        self.recent_quality.clone_from(&track.recent_quality);
         self.depth_fit = track.depth_fit;
         self.depth_frames_used = track.depth_frames_used;
     }
@@ -225,6 +231,7 @@ impl ObjectTrack {
         self.velocity = Vector6::zeros();
         self.anchor = None;
         self.low_ticks = 0;
+        self.recent_quality.clear();
         self.redetections += 1;
     }
 
@@ -250,6 +257,7 @@ impl ObjectTrack {
         self.predicted = self.pose;
         self.t_us = t_us;
         self.low_ticks = 0;
+        self.recent_quality.clear();
         self.state = TrackingState::Tracking;
     }
 
@@ -290,13 +298,12 @@ impl ObjectTrack {
         } else {
             self.low_ticks = 0;
         }
-        self.state = if self.low_ticks >= q.lost_after_ticks {
-            TrackingState::Lost
-        } else if self.quality < q.degraded_below {
-            TrackingState::Degraded
-        } else {
-            TrackingState::Tracking
-        };
+        self.recent_quality.push(self.quality);
+        self.state = q.state(
+            self.quality,
+            self.low_ticks,
+            self.recent_quality.full_mean(),
+        );
 
         // Velocity: at a fresh depth frame from the motion since the previous one (anchored on depth, so a drift
         // the motion model itself introduced between frames is not fed back); otherwise from the last tick,
