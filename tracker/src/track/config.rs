@@ -44,7 +44,7 @@ impl Default for QualityConfig {
             degraded_below: 0.5,
             lost_below: 0.2,
             lost_after_ticks: 12,
-            lost_mean_below: 0.5,
+            lost_mean_below: 0.35,
             lost_mean_ticks: 60,
         }
     }
@@ -273,8 +273,8 @@ mod tests {
         assert_eq!(q.state(0.1, 11, None), TrackingState::Degraded);
         assert_eq!(q.state(0.1, 12, None), TrackingState::Lost);
         // Never 12 low ticks in a row, but mediocre for the whole window: lost even on a good tick.
-        assert_eq!(q.state(0.9, 0, Some(0.45)), TrackingState::Lost);
-        assert_eq!(q.state(0.3, 0, Some(0.55)), TrackingState::Degraded);
+        assert_eq!(q.state(0.9, 0, Some(0.3)), TrackingState::Lost);
+        assert_eq!(q.state(0.3, 0, Some(0.4)), TrackingState::Degraded);
         assert_eq!(q.state(0.3, 0, None), TrackingState::Degraded);
     }
 }

@@ -49,7 +49,10 @@ pub(crate) struct ObjectTrack {
     pub redetections: u64,
     /// The safety-net check of the latest refinement; `None` if that tick ran none.
     pub fallback_check: Option<DepthFallbackCheck>,
+    /// Fraction of the used model points the depth agreed with at the latest depth frame.
     depth_fit: f64,
+    /// Fraction of the model points the depth measured (not hidden, not missing) at the latest depth frame.
+    visibility: f64,
     depth_frames_used: u32,
     pub roi: Option<Roi>,
     pub target: RenderTarget,
@@ -111,6 +114,7 @@ impl ObjectTrack {
             fallback_check: None,
             redetections: 0,
             depth_fit: 1.0,
+            visibility: 1.0,
             depth_frames_used: 0,
             roi: None,
             target: RenderTarget::with_capacity(config.roi_size, config.roi_size),
@@ -156,6 +160,7 @@ impl ObjectTrack {
         self.low_ticks = track.low_ticks;
         self.recent_quality.clone_from(&track.recent_quality);
         self.depth_fit = track.depth_fit;
+        self.visibility = track.visibility;
         self.depth_frames_used = track.depth_frames_used;
     }
 
@@ -277,13 +282,14 @@ impl ObjectTrack {
         event_support: Option<f64>,
         config: &TrackerConfig,
     ) {
-        // Quality evidence: depth agreement at the last exposure, visibility, event support of the outline.
-        let mut visibility = 1.0;
+        // Quality evidence: depth agreement and visibility at the last exposure (both held until the next one),
+        // event support of the outline.
         if let Some(s) = fresh_depth {
             let used = s.measured.max(1) as f64;
             self.depth_fit = s.inliers as f64 / used;
-            visibility = (s.measured as f64 / s.points.max(1) as f64).min(1.0);
+            self.visibility = (s.measured as f64 / s.points.max(1) as f64).min(1.0);
         }
+        let visibility = self.visibility;
         let in_view = self.roi.is_some() && self.view.visible_pixels > 0;
         let support = event_support.unwrap_or(1.0);
         let quality = if in_view {

@@ -1,0 +1,68 @@
+//! The quality score is built from evidence measured at depth frames (depth agreement, visible fraction) and,
+//! for fast motion, the event support of the outline. Between depth frames the depth evidence is held, so without
+//! events the quality may change only at a depth frame: it must not rise at the ticks in between because the
+//! visible fraction was forgotten (which made the state flicker `degraded` at every depth frame and `tracking`
+//! at the three ticks after it).
+
+use drivers::recording::Recording;
+use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
+use hil_sim::motion::{MotionProfile, SpeedLevel};
+use hil_sim::objects::ObjectKind;
+use tracker::eval::{PoseTrack, recording_ticks};
+use tracker::render::CpuRenderer;
+use tracker::track::{
+    EventTrack6d, TrackerConfig, recording_object, recording_rig, track_recording,
+};
+
+#[test]
+fn without_events_quality_changes_only_at_depth_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = GenerateConfig::new(
+        ObjectSource::Library(ObjectKind::CrackerBox),
+        MotionProfile::HandSwitch,
+        SpeedLevel::Slow,
+        1.0,
+        7,
+    );
+    generate(&cfg, dir.path(), |_| {}).expect("generating the recording");
+    let recording = Recording::open(dir.path()).expect("recording");
+    let gt = recording.ground_truth.clone().expect("ground truth");
+    let truth = PoseTrack::from_samples(&gt, "cracker_box");
+    let ticks = recording_ticks(&recording).expect("ticks");
+    let first = ticks[0].t_us;
+    let pose = truth.interpolated_at(first).expect("first pose");
+    let object = recording_object(&recording, "cracker_box", first, pose).expect("model");
+    let rig = recording_rig(&recording).expect("rig");
+    let config = TrackerConfig {
+        events: false,
+        ..TrackerConfig::default()
+    };
+    let mut tracker = EventTrack6d::new(config, rig, vec![object], Box::new(CpuRenderer::new()))
+        .expect("tracker");
+
+    let mut qualities = Vec::new();
+    let stats = track_recording(
+        &recording,
+        &mut tracker,
+        first,
+        |_, estimates, _| qualities.push(estimates[0].quality),
+        |_| {},
+    )
+    .expect("replay");
+    let depth_frames = stats.depth_frames as usize;
+    let changes = qualities.windows(2).filter(|w| w[0] != w[1]).count();
+    assert!(
+        qualities.len() >= 3 * depth_frames,
+        "{} ticks for {depth_frames} depth frames",
+        qualities.len()
+    );
+    // The visible fraction is below one at practically every frame (the sensor misses edges, the hand covers
+    // part of the box), so the old behaviour changed the quality twice per frame.
+    let below_one = qualities.iter().filter(|&&q| q < 0.999).count();
+    assert!(below_one > qualities.len() / 2, "quality {qualities:?}");
+    assert!(
+        changes <= depth_frames,
+        "quality changed {changes} times over {} ticks with {depth_frames} depth frames: {qualities:?}",
+        qualities.len()
+    );
+}
