@@ -9,6 +9,7 @@ use tracker::eval::bench::{
     MethodResults, SuiteSequence, method_from_spec, open_sequence, results_json, results_markdown,
     run_sequence,
 };
+use tracker::eval::quality_report::method_quality_report;
 use tracker::eval::{
     AucLimit, PoseTrack, evaluate_object, format_pose_csv, parse_pose_csv, recording_ticks,
 };
@@ -52,7 +53,8 @@ fn bench_methods_on_a_short_recording() {
 
     // Noise grows -> every score falls; the static pose is far worse than small noise on a shaking object.
     let small = run("gt-noise:2:1", &seq).mean(false, AucLimit::Diameter);
-    let large = run("gt-noise:15:6", &seq).mean(false, AucLimit::Diameter);
+    let large_run = run("gt-noise:15:6", &seq);
+    let large = large_run.mean(false, AucLimit::Diameter);
     let stat = run("static", &seq);
     let st = stat.mean(false, AucLimit::Diameter);
     assert!(
@@ -73,9 +75,39 @@ fn bench_methods_on_a_short_recording() {
     assert_eq!(sq["object"], "can");
     assert_eq!(sq["motion"], "shake");
     assert_eq!(sq["speed"], "moderate");
+    // The quality section: exact poses never fail; every scored tick lands in a band; a constant quality
+    // correlates with nothing.
+    let q = &m["quality"];
+    assert_eq!(
+        (q["sequences"].as_u64(), q["failed"].as_u64()),
+        (Some(1), Some(0))
+    );
+    assert!(q["spearman"].is_null(), "{q}");
+    let banded: u64 = q["bands"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["ticks"].as_u64().unwrap())
+        .sum();
+    assert_eq!(banded, s.frames as u64);
+    // 15 mm per axis on a can (diameter about 12 cm) is off by more than a tenth of the diameter on most ticks:
+    // failed, and the oracle never says `lost`.
+    let noisy = method_quality_report(&large_run);
+    assert_eq!(
+        (
+            noisy.failed,
+            noisy.failed_with_lost,
+            noisy.lost_without_failure
+        ),
+        (1, 0, 0)
+    );
     let md = results_markdown("test", &[stat, exact], AucLimit::Metres);
     assert!(
         md.contains("| can |") && md.contains("| **MEAN** |") && md.contains("update rate (Hz)")
+    );
+    assert!(
+        md.contains("## Quality and `lost` against the error"),
+        "{md}"
     );
 
     // The pose CSV round trip scores the same as the in-memory poses.

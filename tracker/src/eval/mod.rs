@@ -10,6 +10,7 @@ mod kdtree;
 pub mod plot;
 mod pose_csv;
 mod pose_error;
+pub mod quality_report;
 mod recall;
 pub mod report;
 mod sequence;

@@ -1,6 +1,7 @@
 //! The benchmark report: `results.md` (tables shaped like the paper's Table 1) and `results.json`.
 
 use super::bench::MethodResults;
+use super::quality_report::{QualityReport, method_quality_report};
 use super::recall::AucLimit;
 use super::sequence::Summary;
 use serde_json::{Map, Value, json};
@@ -59,10 +60,57 @@ pub fn results_json(suite: &str, results: &[MethodResults], limit: AucLimit) -> 
                 "parameters": m.parameters.clone().unwrap_or(Value::Null),
                 "objects": objects,
                 "sequences": seqs,
+                "quality": serde_json::to_value(method_quality_report(m)).unwrap_or(Value::Null),
             }),
         );
     }
     json!({"suite": suite, "auc_threshold": limit.describe(), "methods": methods})
+}
+
+fn millimetres(m: Option<f64>) -> String {
+    m.map_or_else(|| "-".into(), |m| format!("{:.1}", m * 1000.0))
+}
+
+/// The quality section: per method, the rank correlation of quality with the error, the median ADD-S error per
+/// quality band, and `lost` against true failure.
+fn quality_table(out: &mut String, results: &[MethodResults]) {
+    let reports: Vec<(&str, QualityReport)> = results
+        .iter()
+        .map(|m| (m.name.as_str(), method_quality_report(m)))
+        .collect();
+    let Some((_, first)) = reports.first() else {
+        return;
+    };
+    out.push_str(
+        "\n## Quality and `lost` against the error (120 Hz)\n\nSpearman: rank correlation of the method's \
+         quality with the negated ADD-S error over every tick (+1: higher quality, smaller error). Then the \
+         median ADD-S error (mm) and ticks per quality band. Failed: ADD-S error above 0.1 x diameter on more \
+         than half of a sequence's last quarter.\n\n| method | Spearman |",
+    );
+    for b in &first.bands {
+        let _ = write!(out, " q {:.1}-{:.1}: mm (ticks) |", b.from, b.to);
+    }
+    out.push_str(
+        " sequences | failed | failed with `lost` | `lost`, not failed | state changes |\n| --- | ---: |",
+    );
+    for _ in &first.bands {
+        out.push_str(" ---: |");
+    }
+    out.push_str(" ---: | ---: | ---: | ---: | ---: |\n");
+    for (name, r) in &reports {
+        let rho = r
+            .spearman
+            .map_or_else(|| "-".into(), |x| format!("{x:+.2}"));
+        let _ = write!(out, "| {name} | {rho} |");
+        for b in &r.bands {
+            let _ = write!(out, " {} ({}) |", millimetres(b.median_error_m), b.ticks);
+        }
+        let _ = writeln!(
+            out,
+            " {} | {} | {} | {} | {} |",
+            r.sequences, r.failed, r.failed_with_lost, r.lost_without_failure, r.state_changes
+        );
+    }
 }
 
 fn cells(s: Option<&Summary>) -> String {
@@ -122,7 +170,8 @@ fn table(
 }
 
 /// The `results.md` report: per-object tables (rows = objects, columns = ADD-S / ADD / AR per method) at 120 Hz
-/// (every tick, with the update rate) and at 30 Hz (depth-exposure ticks), then a per-sequence table.
+/// (every tick, with the update rate) and at 30 Hz (depth-exposure ticks), how well each method's quality and
+/// `lost` tell its error, then a per-sequence table.
 pub fn results_markdown(suite: &str, results: &[MethodResults], limit: AucLimit) -> String {
     let mut s = format!(
         "# Benchmark `{suite}`\n\nAUC of ADD-S and ADD (thresholds 0 to {}) and BOP AR \
@@ -133,6 +182,7 @@ pub fn results_markdown(suite: &str, results: &[MethodResults], limit: AucLimit)
     table(&mut s, results, false, true, limit);
     s.push_str("\n## 30 Hz (depth-exposure ticks only)\n\n");
     table(&mut s, results, true, false, limit);
+    quality_table(&mut s, results);
     s.push_str("\n## Per sequence (120 Hz)\n\n| sequence | object | motion | speed |");
     for m in results {
         let _ = write!(s, " {0} ADD-S | {0} ADD | {0} AR |", m.name);

@@ -18,11 +18,14 @@ use tracker::eval::plot::line_plot;
 /// DIR/poses/<method>/<sequence>.csv.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Suite: a name `hil-sim suite` knows (`dev`, `smoke`; generated or reused under --suites-dir) or a directory
-    /// of recordings (with or without suite.json).
+    /// Suite: a name `hil-sim suite` knows (`dev`, `holdout`, `smoke`, `multi`; generated or reused under
+    /// --suites-dir) or a directory of recordings (with or without suite.json).
     #[arg(long, value_name = "NAME|DIR")]
     pub suite: String,
-    /// Comma-separated methods: `static`, `gt-noise` (5 mm, 2 deg), `gt-noise:MM:DEG`.
+    /// Comma-separated methods: the trackers `eventtrack6d`, `depth30` (depth frames only, pose held in between),
+    /// `events-only` (no depth after the first frame), each optionally `NAME@DEG:CM` (first pose turned by DEG
+    /// degrees and moved by CM centimetres, seed 1); the harness checks `static` (first pose held) and `gt-noise`
+    /// (ground truth with 5 mm, 2 deg noise) or `gt-noise:MM:DEG`.
     #[arg(long, value_delimiter = ',', required = true, value_name = "A,B,...")]
     pub methods: Vec<String>,
     /// Output directory.

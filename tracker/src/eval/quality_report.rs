@@ -1,0 +1,288 @@
+//! How well a method's own quality score and state tell its true error (issue 5: "report how well quality
+//! predicts ADD-S error and how often `lost` is raised on sequences where tracking truly failed versus when it
+//! did not"): the rank correlation of quality with the error, the median error by quality band, and `lost`
+//! against true failure per sequence.
+
+use super::bench::{MethodResults, SequenceResult};
+use serde::Serialize;
+
+/// Lower edges of the quality bands, highest first; each band reaches up to the next higher edge (the first to 1).
+pub const QUALITY_BAND_EDGES: [f64; 4] = [0.8, 0.5, 0.2, 0.0];
+
+/// One tick of one sequence as the quality report sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QualityTick<'a> {
+    /// The method's quality at the tick, in [0, 1].
+    pub quality: f64,
+    /// The method's state name at the tick (`tracking`, `degraded`, `lost`).
+    pub state: &'a str,
+    /// ADD-S error at the tick, metres (infinite when the method had no pose).
+    pub error_m: f64,
+}
+
+/// Ticks of one quality band.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct QualityBand {
+    /// Lowest quality in the band (inclusive).
+    pub from: f64,
+    /// Highest quality in the band (exclusive, except 1 for the top band).
+    pub to: f64,
+    /// Ticks in the band.
+    pub ticks: usize,
+    /// Median ADD-S error of those ticks, metres (`None` without ticks).
+    pub median_error_m: Option<f64>,
+}
+
+/// The quality report of one method over a suite.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct QualityReport {
+    /// Ticks with a finite error (the correlation and the bands use these).
+    pub ticks: usize,
+    /// Spearman rank correlation of quality with the negated ADD-S error over every tick of every sequence:
+    /// +1 when a higher quality always means a smaller error. `None` when the quality or the error is constant.
+    pub spearman: Option<f64>,
+    /// Ticks and median error per band of [`QUALITY_BAND_EDGES`], highest band first.
+    pub bands: Vec<QualityBand>,
+    /// Sequences (objects of sequences) evaluated.
+    pub sequences: usize,
+    /// Sequences that truly failed: an ADD-S error above 0.1 x diameter (where the AUC gives a tick nothing) on
+    /// more than half of the last quarter of their ticks.
+    pub failed: usize,
+    /// Failed sequences on which `lost` was raised at least once.
+    pub failed_with_lost: usize,
+    /// Sequences that did not fail on which `lost` was raised at least once.
+    pub lost_without_failure: usize,
+    /// Ticks whose state differs from the tick before (in the same sequence).
+    pub state_changes: usize,
+}
+
+/// Whether a sequence truly failed: error above `0.1 x diameter_m` on more than half of its last quarter.
+pub fn truly_failed(errors_m: &[f64], diameter_m: f64) -> bool {
+    let last = &errors_m[errors_m.len() * 3 / 4..];
+    let off = last
+        .iter()
+        .filter(|&&e| e.is_nan() || e > 0.1 * diameter_m)
+        .count();
+    !last.is_empty() && 2 * off > last.len()
+}
+
+/// Spearman rank correlation of `a` with `b` (average ranks for ties); `None` for fewer than two pairs or a
+/// constant side.
+pub fn spearman(a: &[f64], b: &[f64]) -> Option<f64> {
+    if a.len() != b.len() || a.len() < 2 {
+        return None;
+    }
+    let (ra, rb) = (ranks(a), ranks(b));
+    let n = ra.len() as f64;
+    let (ma, mb) = (ra.iter().sum::<f64>() / n, rb.iter().sum::<f64>() / n);
+    let (mut cov, mut va, mut vb) = (0.0, 0.0, 0.0);
+    for (x, y) in ra.iter().zip(&rb) {
+        cov += (x - ma) * (y - mb);
+        va += (x - ma) * (x - ma);
+        vb += (y - mb) * (y - mb);
+    }
+    (va > 0.0 && vb > 0.0).then(|| (cov / (va * vb).sqrt()).clamp(-1.0, 1.0))
+}
+
+/// Ranks from 0, ties sharing their average rank. NaN sorts last.
+fn ranks(x: &[f64]) -> Vec<f64> {
+    let mut order: Vec<usize> = (0..x.len()).collect();
+    order.sort_by(|&i, &j| x[i].total_cmp(&x[j]));
+    let mut out = vec![0.0; x.len()];
+    let mut i = 0;
+    while i < order.len() {
+        let mut j = i;
+        while j + 1 < order.len() && x[order[j + 1]] == x[order[i]] {
+            j += 1;
+        }
+        for &k in &order[i..=j] {
+            out[k] = (i + j) as f64 / 2.0;
+        }
+        i = j + 1;
+    }
+    out
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(f64::total_cmp);
+    Some(v[v.len() / 2])
+}
+
+/// The report over `sequences`, each its ticks in time order and its object's diameter (metres).
+pub fn quality_report<'a>(sequences: &[(Vec<QualityTick<'a>>, f64)]) -> QualityReport {
+    let mut report = QualityReport {
+        ticks: 0,
+        spearman: None,
+        bands: Vec::new(),
+        sequences: sequences.len(),
+        failed: 0,
+        failed_with_lost: 0,
+        lost_without_failure: 0,
+        state_changes: 0,
+    };
+    let (mut qualities, mut negated) = (Vec::new(), Vec::new());
+    let mut banded: Vec<Vec<f64>> = vec![Vec::new(); QUALITY_BAND_EDGES.len()];
+    for (ticks, diameter) in sequences {
+        let errors: Vec<f64> = ticks.iter().map(|t| t.error_m).collect();
+        let lost = ticks.iter().any(|t| t.state == "lost");
+        if truly_failed(&errors, *diameter) {
+            report.failed += 1;
+            report.failed_with_lost += usize::from(lost);
+        } else {
+            report.lost_without_failure += usize::from(lost);
+        }
+        report.state_changes += ticks
+            .windows(2)
+            .filter(|w| w[0].state != w[1].state)
+            .count();
+        for t in ticks.iter().filter(|t| t.error_m.is_finite()) {
+            qualities.push(t.quality);
+            negated.push(-t.error_m);
+            if let Some(band) = QUALITY_BAND_EDGES.iter().position(|&lo| t.quality >= lo) {
+                banded[band].push(t.error_m);
+            }
+        }
+    }
+    report.ticks = qualities.len();
+    report.spearman = spearman(&qualities, &negated);
+    report.bands = QUALITY_BAND_EDGES
+        .iter()
+        .zip(banded)
+        .enumerate()
+        .map(|(k, (&from, errors))| QualityBand {
+            from,
+            to: if k == 0 {
+                1.0
+            } else {
+                QUALITY_BAND_EDGES[k - 1]
+            },
+            ticks: errors.len(),
+            median_error_m: median(errors),
+        })
+        .collect();
+    report
+}
+
+/// The ticks of one evaluated sequence: each scored frame with the method's quality and state at that time (the
+/// latest pose row at or before it, as the scores hold it; a frame before the first row has quality 0 and no
+/// state).
+pub fn sequence_ticks(s: &SequenceResult) -> Vec<QualityTick<'_>> {
+    let rows = &s.records;
+    s.scores
+        .frames
+        .iter()
+        .map(|f| {
+            let k = rows.partition_point(|r| r.t_us <= f.t_us);
+            let row = k.checked_sub(1).map(|k| &rows[k]);
+            QualityTick {
+                quality: row.map_or(0.0, |r| r.quality),
+                state: row.map_or("", |r| r.state.as_str()),
+                error_m: f.errors.add_s,
+            }
+        })
+        .collect()
+}
+
+/// The report of one method's results (every sequence, 120 Hz ticks).
+pub fn method_quality_report(m: &MethodResults) -> QualityReport {
+    let sequences: Vec<_> = m
+        .sequences
+        .iter()
+        .map(|s| (sequence_ticks(s), s.scores.diameter))
+        .collect();
+    quality_report(&sequences)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn tick(quality: f64, state: &str, error_m: f64) -> QualityTick<'_> {
+        QualityTick {
+            quality,
+            state,
+            error_m,
+        }
+    }
+
+    #[test]
+    fn spearman_is_one_for_a_monotone_relation_and_minus_one_reversed() {
+        let a = [0.1, 0.5, 0.2, 0.9];
+        let b = [1.0, 30.0, 2.0, 1000.0];
+        assert!((spearman(&a, &b).unwrap() - 1.0).abs() < 1e-12);
+        let c: Vec<f64> = b.iter().map(|x| -x).collect();
+        assert!((spearman(&a, &c).unwrap() + 1.0).abs() < 1e-12);
+        assert_eq!(spearman(&a, &[1.0; 4]), None);
+        assert_eq!(spearman(&[1.0], &[2.0]), None);
+        // Ties share a rank: [0, 0, 1] against [1, 2, 3] is 0.866.
+        let r = spearman(&[0.0, 0.0, 1.0], &[1.0, 2.0, 3.0]).unwrap();
+        assert!((r - 0.75f64.sqrt()).abs() < 1e-12, "{r}");
+    }
+
+    #[test]
+    fn failure_lost_and_bands_are_counted_per_sequence() {
+        let d = 0.1; // failure above 1 cm
+        // Fine throughout, `lost` once: a false alarm.
+        let fine: Vec<_> = (0..8)
+            .map(|i| tick(0.9, if i == 3 { "lost" } else { "tracking" }, 0.002))
+            .collect();
+        // Off over its whole last quarter, with `lost`.
+        let failed: Vec<_> = (0..8)
+            .map(|i| {
+                if i < 6 {
+                    tick(0.6, "tracking", 0.004)
+                } else {
+                    tick(0.1, "lost", 0.05)
+                }
+            })
+            .collect();
+        // Off at the end without `lost`; a missing pose counts as off.
+        let quiet: Vec<_> = (0..8)
+            .map(|i| tick(0.3, "degraded", if i < 6 { 0.003 } else { f64::INFINITY }))
+            .collect();
+        let r = quality_report(&[(fine, d), (failed, d), (quiet, d)]);
+        assert_eq!(r.sequences, 3);
+        assert_eq!(
+            (r.failed, r.failed_with_lost, r.lost_without_failure),
+            (2, 1, 1)
+        );
+        assert_eq!(r.state_changes, 2 + 1);
+        assert_eq!(r.ticks, 22);
+        let counts: Vec<usize> = r.bands.iter().map(|b| b.ticks).collect();
+        assert_eq!(counts, vec![8, 6, 6, 2]);
+        assert_eq!(r.bands[0].median_error_m, Some(0.002));
+        assert_eq!(r.bands[3].median_error_m, Some(0.05));
+        assert_eq!((r.bands[0].from, r.bands[0].to), (0.8, 1.0));
+        assert_eq!((r.bands[3].from, r.bands[3].to), (0.0, 0.2));
+        // Higher quality, smaller error here.
+        assert!(r.spearman.unwrap() > 0.5);
+    }
+
+    #[test]
+    fn a_sequence_off_on_half_its_last_quarter_exactly_did_not_fail() {
+        let errors = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+        assert!(!truly_failed(&errors, 0.1));
+        assert!(truly_failed(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0], 0.1));
+        assert!(!truly_failed(&[], 0.1));
+    }
+
+    proptest! {
+        #[test]
+        fn spearman_stays_in_range_and_ignores_monotone_rescaling(
+            pairs in prop::collection::vec((0.0f64..1.0, 0.0f64..1.0), 2..60)
+        ) {
+            let (a, b): (Vec<f64>, Vec<f64>) = pairs.into_iter().unzip();
+            if let Some(r) = spearman(&a, &b) {
+                prop_assert!((-1.0..=1.0).contains(&r));
+                let scaled: Vec<f64> = a.iter().map(|x| 0.5 * x + x * x).collect();
+                let s = spearman(&scaled, &b).unwrap();
+                prop_assert!((r - s).abs() < 1e-9);
+                prop_assert!((spearman(&b, &a).unwrap() - r).abs() < 1e-9);
+            }
+        }
+    }
+}
