@@ -36,6 +36,10 @@ pub struct QualityConfig {
     pub lost_mean_below: f32,
     /// Length of that window, ticks (0 disables the rule; 60 is 0.5 s at 120 Hz).
     pub lost_mean_ticks: u32,
+    /// A better state is reported (pose CSV, zenoh, CAN, status) only after better states held for this many
+    /// ticks in a row; a worse one at once. 0 or 1 reports every tick's state. The tracker's own decisions
+    /// (prediction, re-detection) use each tick's state.
+    pub recover_ticks: u32,
 }
 
 impl Default for QualityConfig {
@@ -46,6 +50,7 @@ impl Default for QualityConfig {
             lost_after_ticks: 12,
             lost_mean_below: 0.35,
             lost_mean_ticks: 60,
+            recover_ticks: 6,
         }
     }
 }

@@ -19,7 +19,7 @@ mod validate;
 
 pub use bench_method::{InitNoise, TrackerMethod, recording_object, recording_rig, tracking_rig};
 pub use config::{DepthUse, QualityConfig, TrackerConfig, TrackingMethod};
-pub use estimate::{PoseEstimate, TrackingState};
+pub use estimate::{PoseEstimate, ReportedState, TrackingState};
 pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, TrackingRig};
 pub use fallback_check::{
     DepthFallbackCheck, FALLBACK_TRACE_HEADER, FallbackCandidate, FallbackStart,

@@ -296,6 +296,12 @@ impl TrackerConfig {
             |v| v <= 12_000.0,
             "must be at most 12000 ticks (100 s at 120 Hz)",
         )?;
+        check(
+            "quality.recover_ticks",
+            f64::from(q.recover_ticks),
+            |v| v <= 12_000.0,
+            "must be at most 12000 ticks (100 s at 120 Hz)",
+        )?;
         let r = &self.redetect;
         check(
             "redetect.cell_px",
@@ -353,5 +359,9 @@ mod tests {
         assert_eq!(e.key, "redetect.cell_px");
         let e = parse("[redetect]\nmin_score = 1.5").unwrap_err();
         assert_eq!(e.key, "redetect.min_score");
+        let e = parse("[quality]\nrecover_ticks = 20000").unwrap_err();
+        assert_eq!(e.key, "quality.recover_ticks");
+        let e = parse("[quality]\nlost_mean_ticks = 20000").unwrap_err();
+        assert_eq!(e.key, "quality.lost_mean_ticks");
     }
 }

@@ -408,7 +408,7 @@ impl PoseTracker for EventTrack6d {
             t_us,
             pose: o.pose,
             quality: o.quality,
-            state: o.state,
+            state: o.reported.get(),
         }));
     }
 
@@ -443,10 +443,9 @@ impl PoseTracker for EventTrack6d {
             }
             _ => o.pose,
         };
-        let state = if t_us > o.t_us + 8_333 && o.state == TrackingState::Tracking {
-            TrackingState::Degraded
-        } else {
-            o.state
+        let state = match o.reported.get() {
+            TrackingState::Tracking if t_us > o.t_us + 8_333 => TrackingState::Degraded,
+            reported => reported,
         };
         Some(PoseEstimate {
             object,

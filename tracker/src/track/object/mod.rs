@@ -5,7 +5,7 @@ mod quality_window;
 mod refine;
 
 use super::config::TrackerConfig;
-use super::estimate::TrackingState;
+use super::estimate::{ReportedState, TrackingState};
 use super::fallback_check::DepthFallbackCheck;
 use crate::geometry::{PinholeCamera, Roi};
 use crate::mesh::Symmetry;
@@ -39,7 +39,10 @@ pub(crate) struct ObjectTrack {
     /// The estimate at the latest fresh depth frame (time, pose).
     anchor: Option<(i64, Isometry3<f64>)>,
     pub quality: f32,
+    /// This tick's state (the tracker's own decisions use it).
     pub state: TrackingState,
+    /// The state reported to consumers: `state` with a delayed recovery.
+    pub reported: ReportedState,
     low_ticks: u32,
     /// Quality of the recent ticks (the mean-quality `lost` rule).
     recent_quality: QualityWindow,
@@ -108,6 +111,7 @@ impl ObjectTrack {
             anchor: None,
             quality: 1.0,
             state: TrackingState::Tracking,
+            reported: ReportedState::new(TrackingState::Tracking),
             low_ticks: 0,
             recent_quality: QualityWindow::new(config.quality.lost_mean_ticks as usize),
             fallbacks: 0,
@@ -157,6 +161,7 @@ impl ObjectTrack {
         self.anchor = track.anchor;
         self.quality = track.quality;
         self.state = track.state;
+        self.reported = track.reported;
         self.low_ticks = track.low_ticks;
         self.recent_quality.clone_from(&track.recent_quality);
         self.depth_fit = track.depth_fit;
@@ -264,6 +269,7 @@ impl ObjectTrack {
         self.low_ticks = 0;
         self.recent_quality.clear();
         self.state = TrackingState::Tracking;
+        self.reported = ReportedState::new(TrackingState::Tracking);
     }
 
     /// Holds the latest estimate at `t_us` without refining (`depth30` between depth frames): pose, quality and
@@ -310,6 +316,7 @@ impl ObjectTrack {
             self.low_ticks,
             self.recent_quality.full_mean(),
         );
+        self.reported.update(self.state, q.recover_ticks);
 
         // Velocity: at a fresh depth frame from the motion since the previous one (anchored on depth, so a drift
         // the motion model itself introduced between frames is not fed back); otherwise from the last tick,
