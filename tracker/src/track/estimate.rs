@@ -86,7 +86,8 @@ pub struct PoseEstimate {
     pub pose: Isometry3<f64>,
     /// Confidence in `[0, 1]` (1 = residuals, visibility and event support all nominal).
     pub quality: f32,
-    /// Tracking state derived from the quality evidence.
+    /// Tracking state derived from the quality evidence, as reported: worse at once, better only after it held
+    /// for `[quality] recover_ticks` ticks (see [`ReportedState`]).
     pub state: TrackingState,
 }
 
