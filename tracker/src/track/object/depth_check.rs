@@ -66,8 +66,8 @@ impl ObjectTrack {
 
     /// Checks the hypothesis `self.predicted` against the fresh depth frame of `inputs` (re-detection): registers
     /// the frame around it and refines on depth only from it, using the render the caller made at it in
-    /// `self.target`. Returns the agreeing fraction and the refined pose; `None` without a depth frame, ROI or
-    /// visible model.
+    /// `self.target`. Returns the agreeing fraction of the model points left in view ([`seen_agreement`]) and the
+    /// refined pose; `None` without a depth frame, ROI or visible model.
     pub fn probe_depth(
         &mut self,
         inputs: &TickInputs<'_>,
@@ -91,28 +91,112 @@ impl ObjectTrack {
         self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
         self.carried
             .render(&start, &roi_camera, &mut self.depth_now);
-        let (fit, pose, _) = self.refine_on_depth(start, &roi_camera, config);
-        Some((fit, pose))
+        let (_, pose, stats) = self.refine_on_depth(start, &roi_camera, config);
+        Some((seen_agreement(&stats), pose))
     }
 
     /// How well the silhouette in `self.target` (rendered at `pose`) matches what the fresh depth image in
-    /// `self.depth_now` shows at the object's depth: pixels where model and measurement agree in depth, over
-    /// pixels where either the model is or a measurement lies within half a diameter of the centre's depth (an
-    /// intersection over union, in [0, 1]). Re-detection ranks places by it: unlike the agreeing fraction of model
-    /// points, it stays low for a pose that shows only a small part of the object where the depth sees all of it.
+    /// `self.depth_now` shows at the object's depth ([`silhouette_overlap`]). Re-detection ranks places by it:
+    /// unlike the agreeing fraction of model points, it stays low for a pose that shows only a small part of the
+    /// object where the depth sees all of it.
     pub fn silhouette_agreement(&self, pose: &Isometry3<f64>, config: &TrackerConfig) -> f64 {
         let c = self.center_at(pose);
-        let band = 0.5 * self.diameter;
         let noise = config.depth_term;
-        let tolerance = 3.0 * (noise.sigma_0 + noise.sigma_z2 * c.z * c.z) + 0.005;
-        let (mut agree, mut union) = (0usize, 0usize);
-        let rendered = self.target.depth().iter().zip(self.target.mask());
-        for (&zm, (&zr, &label)) in self.depth_now.z.iter().zip(rendered) {
-            let model = label == self.label;
-            let measured = zm > 0.0 && (f64::from(zm) - c.z).abs() < band;
-            union += usize::from(model || measured);
-            agree += usize::from(model && zm > 0.0 && f64::from((zm - zr).abs()) < tolerance);
+        silhouette_overlap(
+            &self.depth_now.z,
+            self.target.depth(),
+            self.target.mask(),
+            self.label,
+            c.z,
+            0.5 * self.diameter,
+            3.0 * (noise.sigma_0 + noise.sigma_z2 * c.z * c.z) + 0.005,
+        )
+    }
+}
+
+/// Below this fraction of its model points in view, a re-detection place is scored as if this fraction were in
+/// view: a place hidden behind an occluder must not win on the few points left.
+const MIN_SEEN_FRACTION: f64 = 0.3;
+
+/// The fraction of a place's model points the depth confirms, among those not hidden by a nearer measurement (at
+/// least [`MIN_SEEN_FRACTION`] of all). A hand or another object in front of part of the object is neither for
+/// nor against the place: counting its points as disagreeing scored a correctly placed, half-hidden object below
+/// the hand holding it, which re-detection then took for the object.
+pub(super) fn seen_agreement(stats: &DepthTermStats) -> f64 {
+    let all = stats.points as f64;
+    let seen =
+        ((stats.points - stats.occluded.min(stats.points)) as f64).max(MIN_SEEN_FRACTION * all);
+    if seen <= 0.0 {
+        return 0.0;
+    }
+    (stats.inliers as f64 / seen).min(1.0)
+}
+
+/// Intersection over union of a rendered silhouette with the measured depth near the object, in [0, 1]: pixels
+/// where the model (`mask == label`) and the measurement (`measured`, metres, 0 = invalid) agree within
+/// `tolerance` metres, over pixels where either the model is or a measurement lies within `band` metres of the
+/// object centre's depth `centre_z`. Model pixels whose measurement is nearer than the model by more than
+/// `tolerance` are hidden by an occluder and left out of both. The three slices are row-major over one ROI.
+pub(super) fn silhouette_overlap(
+    measured: &[f32],
+    rendered: &[f32],
+    mask: &[u16],
+    label: u16,
+    centre_z: f64,
+    band: f64,
+    tolerance: f64,
+) -> f64 {
+    let (mut agree, mut union) = (0usize, 0usize);
+    for (&zm, (&zr, &l)) in measured.iter().zip(rendered.iter().zip(mask)) {
+        let model = l == label;
+        if model && zm > 0.0 && f64::from(zr - zm) > tolerance {
+            continue;
         }
-        agree as f64 / union.max(1) as f64
+        let near = zm > 0.0 && (f64::from(zm) - centre_z).abs() < band;
+        union += usize::from(model || near);
+        agree += usize::from(model && zm > 0.0 && f64::from((zm - zr).abs()) < tolerance);
+    }
+    agree as f64 / union.max(1) as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stats(points: usize, occluded: usize, inliers: usize) -> DepthTermStats {
+        DepthTermStats {
+            points,
+            measured: points - occluded,
+            occluded,
+            inliers,
+        }
+    }
+
+    #[test]
+    fn hidden_points_count_neither_for_nor_against_a_place() {
+        // Nothing hidden: the plain agreeing fraction.
+        assert!((seen_agreement(&stats(200, 0, 150)) - 0.75).abs() < 1e-12);
+        // Half hidden by a hand, the rest agreeing: as good as a fully seen, fully agreeing place.
+        assert!((seen_agreement(&stats(200, 100, 100)) - 1.0).abs() < 1e-12);
+        // Almost all hidden: scored as if 30 % were seen, so 10 agreeing points stay a poor place.
+        assert!((seen_agreement(&stats(200, 190, 10)) - 10.0 / 60.0).abs() < 1e-12);
+        assert_eq!(seen_agreement(&stats(0, 0, 0)), 0.0);
+    }
+
+    #[test]
+    fn silhouette_leaves_out_model_pixels_behind_an_occluder() {
+        // A 10-pixel row: the model covers pixels 0..8 at 0.60 m; the depth agrees on 0..4, a hand at 0.55 m
+        // covers 4..8 and also pixels 8..10 beside the object (within half a diameter of its depth).
+        let label = 3;
+        let rendered = [0.6f32; 10];
+        let mask: Vec<u16> = (0..10).map(|i| if i < 8 { label } else { 0 }).collect();
+        let measured: Vec<f32> = (0..10).map(|i| if i < 4 { 0.6 } else { 0.55 }).collect();
+        let iou = silhouette_overlap(&measured, &rendered, &mask, label, 0.6, 0.05, 0.01);
+        // Agreeing 4 over the seen model (4) and the hand beside it (2).
+        assert!((iou - 4.0 / 6.0).abs() < 1e-12, "{iou}");
+        // The same hand behind the model instead (measured farther) is evidence against it.
+        let behind: Vec<f32> = (0..10).map(|i| if i < 4 { 0.6 } else { 0.63 }).collect();
+        let iou = silhouette_overlap(&behind, &rendered, &mask, label, 0.6, 0.05, 0.01);
+        assert!((iou - 4.0 / 10.0).abs() < 1e-12, "{iou}");
     }
 }
