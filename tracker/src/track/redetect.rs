@@ -29,7 +29,7 @@ pub struct RedetectConfig {
     /// A candidate replaces the prediction when its score, in [0, 1], is higher by more than this... The score
     /// of a place is measured after a depth-only refinement from it: the fraction of visible model points the
     /// depth confirms times the square root of the silhouette's intersection over union with the depth measured
-    /// at the object's range.
+    /// at the object's range. Parts hidden by a nearer measurement (a hand) are left out of both.
     pub margin: f64,
     /// ... and at least this high.
     pub min_score: f64,
