@@ -12,7 +12,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RedetectConfig {
-    /// Whether an object that is not `tracking` is searched for at depth frames.
+    /// Whether an object that is `lost`, or `degraded` by more than being partly hidden, is searched for at
+    /// depth frames.
     pub enabled: bool,
     /// Background model cell size, depth pixels (the depth image is sampled once per cell).
     pub cell_px: u32,

@@ -32,7 +32,8 @@ pub(super) struct Search {
 }
 
 impl EventTrack6d {
-    /// At a depth frame: plans the search for every object that is not `tracking`: where it is predicted, then
+    /// At a depth frame: plans the search for every object that needs one (not `tracking`, and not merely
+    /// partly hidden; see [`crate::track::object::ObjectTrack::needs_search`]): where it is predicted, then
     /// the object-sized clusters of foreground (with the predicted orientation and with its longest axis along
     /// the cluster's). Places left over from the previous frame are dropped and counted.
     pub(super) fn plan_redetection(&mut self, t_us: i64) {
@@ -45,7 +46,7 @@ impl EventTrack6d {
         for k in 0..self.objects.len() {
             let o = &self.objects[k];
             r.searches[k] = Search::default();
-            if o.state == TrackingState::Tracking || t_us < o.t_us {
+            if !o.needs_search(&self.config.quality) || t_us < o.t_us {
                 continue;
             }
             if !foreground_ready {

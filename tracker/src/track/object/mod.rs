@@ -4,7 +4,7 @@ mod depth_check;
 mod quality_window;
 mod refine;
 
-use super::config::TrackerConfig;
+use super::config::{QualityConfig, TrackerConfig};
 use super::estimate::{ReportedState, TrackingState};
 use super::fallback_check::DepthFallbackCheck;
 use crate::geometry::{PinholeCamera, Roi};
@@ -279,6 +279,22 @@ impl ObjectTrack {
         self.t_us = t_us;
     }
 
+    /// Whether re-detection should search for this object at a depth frame: it is `lost`, or `degraded` for
+    /// more than being partly hidden. An object whose quality would reach `degraded_below` at full visibility
+    /// (its depth agreement and event support are good, only the visible fraction is low) is not searched for:
+    /// the hand holding it is an object-sized place at its depth, and searching from a good, half-hidden
+    /// estimate moved the object onto the hand.
+    pub fn needs_search(&self, q: &QualityConfig) -> bool {
+        match self.state {
+            TrackingState::Tracking => false,
+            TrackingState::Lost => true,
+            TrackingState::Degraded => {
+                let unhidden = f64::from(self.quality) / visibility_factor(self.visibility);
+                unhidden < f64::from(q.degraded_below)
+            }
+        }
+    }
+
     /// Records the new estimate: quality, state, velocity and the pose history.
     fn finish(
         &mut self,
@@ -299,7 +315,7 @@ impl ObjectTrack {
         let in_view = self.roi.is_some() && self.view.visible_pixels > 0;
         let support = event_support.unwrap_or(1.0);
         let quality = if in_view {
-            self.depth_fit * (0.4 + 0.6 * visibility) * (0.6 + 0.4 * support)
+            self.depth_fit * visibility_factor(visibility) * (0.6 + 0.4 * support)
         } else {
             0.0
         };
@@ -393,6 +409,12 @@ fn normalise(pose: Isometry3<f64>) -> Isometry3<f64> {
     )
 }
 
+/// The factor quality gives the visible fraction `visibility` of the model, in [0.4, 1]: a hidden object is
+/// trusted less, but a fully hidden one keeps 0.4 of what its depth and events say.
+fn visibility_factor(visibility: f64) -> f64 {
+    0.4 + 0.6 * visibility.clamp(0.0, 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -403,6 +425,34 @@ mod tests {
             && uv.y >= roi.y + margin_px
             && uv.x <= roi.x + roi.width - margin_px
             && uv.y <= roi.y + roi.height - margin_px
+    }
+
+    #[test]
+    fn a_degraded_object_is_searched_for_only_when_more_than_hiding_degrades_it() {
+        let config = TrackerConfig::default();
+        let half = Vector3::new(0.05, 0.04, 0.02);
+        let pose = Isometry3::translation(0.0, 0.0, 0.6);
+        let mut o = ObjectTrack::new(1, 0.13, -half, half, pose, 0, &[], &config);
+        let q = config.quality;
+        // 30 % in view, agreeing well: quality 0.7 x (0.4 + 0.6 x 0.3) = 0.406, below `degraded_below` only
+        // because of the hiding (0.7 at full visibility).
+        o.state = TrackingState::Degraded;
+        o.visibility = 0.3;
+        o.quality = 0.406;
+        assert!(!o.needs_search(&q));
+        // Same visibility, poor agreement: searched for.
+        o.quality = 0.2;
+        assert!(o.needs_search(&q));
+        // Fully visible and degraded: searched for.
+        o.visibility = 1.0;
+        o.quality = 0.45;
+        assert!(o.needs_search(&q));
+        o.state = TrackingState::Lost;
+        o.quality = 0.9;
+        assert!(o.needs_search(&q));
+        o.state = TrackingState::Tracking;
+        o.quality = 0.1;
+        assert!(!o.needs_search(&q));
     }
 
     #[test]
