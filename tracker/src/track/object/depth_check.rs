@@ -124,8 +124,7 @@ const MIN_SEEN_FRACTION: f64 = 0.3;
 /// the hand holding it, which re-detection then took for the object.
 pub(super) fn seen_agreement(stats: &DepthTermStats) -> f64 {
     let all = stats.points as f64;
-    let seen =
-        ((stats.points - stats.occluded.min(stats.points)) as f64).max(MIN_SEEN_FRACTION * all);
+    let seen = (stats.points.saturating_sub(stats.occluded) as f64).max(MIN_SEEN_FRACTION * all);
     if seen <= 0.0 {
         return 0.0;
     }
