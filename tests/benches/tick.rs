@@ -1,11 +1,44 @@
 //! One full tracker tick (reconstruction + refinement) at a 160x160 ROI on one core, after replaying a generated
 //! mug shake: a plain 120 Hz tick (carried depth + events) and a depth-exposure tick (registration of the new
-//! frame + refinement), with the CPU renderer and the wgpu renderer.
+//! frame + refinement), with the CPU renderer and the wgpu renderer. The `render_in_*` benches time only the
+//! renderer's calls inside the same ticks, so a tick's cost splits into rendering and everything else.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use eventtrack6d_tests::tick_fixture::{SteadyTracker, mug_recording, steady_tracker};
-use tracker::render::{CpuRenderer, Renderer, RendererKind, create_renderer};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+use tracker::geometry::PinholeCamera;
+use tracker::mesh::Mesh;
+use tracker::render::{
+    CpuRenderer, MeshId, RenderError, RenderTarget, Renderer, RendererKind, Scene, create_renderer,
+};
 use tracker::track::{PoseTracker, TrackerConfig};
+
+/// A renderer that passes every call to `inner` and adds the wall time of each render to `spent_ns`.
+struct TimedRenderer {
+    inner: Box<dyn Renderer + Send>,
+    spent_ns: Arc<AtomicU64>,
+}
+
+impl Renderer for TimedRenderer {
+    fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
+        self.inner.add_mesh(mesh)
+    }
+
+    fn render(
+        &mut self,
+        scene: &Scene<'_>,
+        camera: &PinholeCamera,
+        target: &mut RenderTarget,
+    ) -> Result<(), RenderError> {
+        let start = Instant::now();
+        let out = self.inner.render(scene, camera, target);
+        let ns = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
+        self.spent_ns.fetch_add(ns, Ordering::Relaxed);
+        out
+    }
+}
 
 fn bench_tracker(c: &mut Criterion, label: &str, mut s: SteadyTracker) {
     let mut out = Vec::with_capacity(4);
@@ -27,6 +60,50 @@ fn bench_tracker(c: &mut Criterion, label: &str, mut s: SteadyTracker) {
     });
 }
 
+/// Times only the renderer's share of the same ticks as [`bench_tracker`]: each sample is the summed wall time of
+/// the render calls made by `iters` ticks.
+fn bench_render_share(c: &mut Criterion, label: &str, mut s: SteadyTracker, spent_ns: &AtomicU64) {
+    let mut out = Vec::with_capacity(4);
+    let tick = s.last_tick;
+    c.bench_function(&format!("render_in_tick_{label}_160"), |b| {
+        b.iter_custom(|iters| {
+            spent_ns.store(0, Ordering::Relaxed);
+            for _ in 0..iters {
+                out.clear();
+                s.tracker.tick(&tick, &mut out);
+            }
+            Duration::from_nanos(spent_ns.load(Ordering::Relaxed))
+        })
+    });
+    let mut depth_tick = s.last_tick;
+    depth_tick.depth_frame = Some(s.depth.index);
+    c.bench_function(&format!("render_in_depth_tick_{label}_160"), |b| {
+        b.iter_custom(|iters| {
+            spent_ns.store(0, Ordering::Relaxed);
+            for _ in 0..iters {
+                s.tracker.push_depth(depth_tick.t_us, &s.depth);
+                out.clear();
+                s.tracker.tick(&depth_tick, &mut out);
+            }
+            Duration::from_nanos(spent_ns.load(Ordering::Relaxed))
+        })
+    });
+}
+
+/// A steady tracker on `rec` whose renderer `inner` adds its render time to the returned counter.
+fn timed_tracker(
+    rec: &drivers::recording::Recording,
+    inner: Box<dyn Renderer + Send>,
+) -> (SteadyTracker, Arc<AtomicU64>) {
+    let spent_ns = Arc::new(AtomicU64::new(0));
+    let timed = TimedRenderer {
+        inner,
+        spent_ns: Arc::clone(&spent_ns),
+    };
+    let s = steady_tracker(rec.clone(), TrackerConfig::default(), Box::new(timed));
+    (s, spent_ns)
+}
+
 fn ticks(c: &mut Criterion) {
     let dir = std::env::temp_dir().join("eventtrack6d-tick-bench");
     let rec = mug_recording(&dir, 0.5);
@@ -36,8 +113,23 @@ fn ticks(c: &mut Criterion) {
         "cpu",
         steady_tracker(rec.clone(), TrackerConfig::default(), cpu),
     );
+    let (s, spent) = timed_tracker(&rec, Box::new(CpuRenderer::new()));
+    bench_render_share(c, "cpu", s, &spent);
     match create_renderer(RendererKind::Gpu) {
-        Ok(gpu) => bench_tracker(c, "gpu", steady_tracker(rec, TrackerConfig::default(), gpu)),
+        Ok(gpu) => {
+            bench_tracker(
+                c,
+                "gpu",
+                steady_tracker(rec.clone(), TrackerConfig::default(), gpu),
+            );
+            match create_renderer(RendererKind::Gpu) {
+                Ok(gpu) => {
+                    let (s, spent) = timed_tracker(&rec, gpu);
+                    bench_render_share(c, "gpu", s, &spent);
+                }
+                Err(e) => eprintln!("gpu render-share bench skipped: {e}"),
+            }
+        }
         Err(e) => eprintln!("gpu tick bench skipped: {e}"),
     }
 }
