@@ -4,39 +4,24 @@
 //! renderer's calls inside the same ticks, so a tick's cost splits into rendering and everything else.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use eventtrack6d_tests::render_hook::HookedRenderer;
 use eventtrack6d_tests::tick_fixture::{SteadyTracker, mug_recording, steady_tracker};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
-use tracker::geometry::PinholeCamera;
-use tracker::mesh::Mesh;
-use tracker::render::{
-    CpuRenderer, MeshId, RenderError, RenderTarget, Renderer, RendererKind, Scene, create_renderer,
-};
+use tracker::render::{CpuRenderer, Renderer, RendererKind, create_renderer};
 use tracker::track::{PoseTracker, TrackerConfig};
 
-/// A renderer that passes every call to `inner` and adds the wall time of each render to `spent_ns`.
-struct TimedRenderer {
-    inner: Box<dyn Renderer + Send>,
+/// Adds the wall time from its creation to its drop to `spent_ns`: held by [`HookedRenderer`] around one render.
+struct RenderTimer {
+    start: Instant,
     spent_ns: Arc<AtomicU64>,
 }
 
-impl Renderer for TimedRenderer {
-    fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
-        self.inner.add_mesh(mesh)
-    }
-
-    fn render(
-        &mut self,
-        scene: &Scene<'_>,
-        camera: &PinholeCamera,
-        target: &mut RenderTarget,
-    ) -> Result<(), RenderError> {
-        let start = Instant::now();
-        let out = self.inner.render(scene, camera, target);
-        let ns = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
+impl Drop for RenderTimer {
+    fn drop(&mut self) {
+        let ns = u64::try_from(self.start.elapsed().as_nanos()).unwrap_or(u64::MAX);
         self.spent_ns.fetch_add(ns, Ordering::Relaxed);
-        out
     }
 }
 
@@ -96,10 +81,11 @@ fn timed_tracker(
     inner: Box<dyn Renderer + Send>,
 ) -> (SteadyTracker, Arc<AtomicU64>) {
     let spent_ns = Arc::new(AtomicU64::new(0));
-    let timed = TimedRenderer {
-        inner,
-        spent_ns: Arc::clone(&spent_ns),
-    };
+    let counter = Arc::clone(&spent_ns);
+    let timed = HookedRenderer::new(inner, move || RenderTimer {
+        start: Instant::now(),
+        spent_ns: Arc::clone(&counter),
+    });
     let s = steady_tracker(rec.clone(), TrackerConfig::default(), Box::new(timed));
     (s, spent_ns)
 }

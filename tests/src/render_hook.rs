@@ -1,19 +1,24 @@
-//! A renderer wrapper that runs a hook before every render, for tests that watch how a tracker renders.
+//! A renderer wrapper that runs a hook around every render, for tests and benches that watch how a tracker
+//! renders.
 
 use std::sync::Arc;
 use tracker::geometry::PinholeCamera;
 use tracker::mesh::Mesh;
 use tracker::render::{MeshId, RenderError, RenderTarget, Renderer, Scene};
 
-/// Renders with `inner`, calling the hook first on every render (ROI renders included); forks share the hook.
-pub struct HookedRenderer {
+/// Renders with `inner`, calling the hook first on every render (ROI renders included) and holding what it returns
+/// until that render is done, so a guard's `Drop` runs right after it; forks share the hook.
+pub struct HookedRenderer<G = ()> {
     inner: Box<dyn Renderer + Send>,
-    hook: Arc<dyn Fn() + Send + Sync>,
+    hook: Arc<dyn Fn() -> G + Send + Sync>,
 }
 
-impl HookedRenderer {
-    /// `inner`, with `hook` run before each of its renders.
-    pub fn new(inner: Box<dyn Renderer + Send>, hook: impl Fn() + Send + Sync + 'static) -> Self {
+impl<G: 'static> HookedRenderer<G> {
+    /// `inner`, with `hook` run before each of its renders and its result dropped after it.
+    pub fn new(
+        inner: Box<dyn Renderer + Send>,
+        hook: impl Fn() -> G + Send + Sync + 'static,
+    ) -> Self {
         Self {
             inner,
             hook: Arc::new(hook),
@@ -21,7 +26,7 @@ impl HookedRenderer {
     }
 }
 
-impl Renderer for HookedRenderer {
+impl<G: 'static> Renderer for HookedRenderer<G> {
     fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
         self.inner.add_mesh(mesh)
     }
@@ -32,7 +37,7 @@ impl Renderer for HookedRenderer {
         camera: &PinholeCamera,
         target: &mut RenderTarget,
     ) -> Result<(), RenderError> {
-        (self.hook)();
+        let _during = (self.hook)();
         self.inner.render(scene, camera, target)
     }
 
