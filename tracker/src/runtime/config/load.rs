@@ -1,0 +1,113 @@
+//! Reading a configuration: TOML text or file to [`Config`], path resolution, and parse errors that name the
+//! line and the key.
+
+use super::*;
+use std::path::Path;
+
+impl Config {
+    /// Parses and validates TOML text; `origin` names it in errors. Relative paths stay relative.
+    pub fn from_toml(text: &str, origin: &str) -> Result<Self, ConfigError> {
+        let config: Config = toml::from_str(text).map_err(|e| parse_error(text, origin, &e))?;
+        config.validate(origin)?;
+        Ok(config)
+    }
+
+    /// The built-in demo configuration.
+    pub fn builtin_default() -> Result<Self, ConfigError> {
+        Self::from_toml(DEFAULT_CONFIG_TOML, "<built-in config/default.toml>")
+    }
+
+    /// Reads, parses, resolves paths against the file's directory, and validates (files included).
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|error| ConfigError::Read {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        let origin = path.display().to_string();
+        let mut config: Config =
+            toml::from_str(&text).map_err(|e| parse_error(&text, &origin, &e))?;
+        let base = path.parent().unwrap_or_else(|| Path::new("."));
+        config.resolve_paths(base);
+        config.validate(&origin)?;
+        config.check_files(&origin)?;
+        Ok(config)
+    }
+
+    /// Makes every relative path absolute-or-relative to `base` (the configuration file's directory).
+    pub fn resolve_paths(&mut self, base: &Path) {
+        let join = |p: &mut PathBuf| {
+            if p.is_relative() {
+                *p = base.join(&*p);
+            }
+        };
+        if let Some(r) = &mut self.replay {
+            join(&mut r.recording);
+        }
+        if let Some(l) = &mut self.live {
+            join(&mut l.calibration);
+        }
+        for o in &mut self.objects {
+            join(&mut o.mesh);
+        }
+        join(&mut self.output.dir);
+    }
+}
+
+/// Turns a TOML/serde error into a [`ConfigError::Parse`] with the line and the dotted key at the error.
+fn parse_error(text: &str, origin: &str, e: &toml::de::Error) -> ConfigError {
+    let message = e.message().trim().to_string();
+    let (line, key) = match e.span() {
+        Some(span) => key_at(text, span.start),
+        None => (0, String::new()),
+    };
+    // An unknown field is reported at the offending key; a missing field at the table.
+    let key = if key.is_empty() {
+        "<top level>".into()
+    } else {
+        key
+    };
+    ConfigError::Parse {
+        origin: origin.into(),
+        line,
+        key,
+        message,
+    }
+}
+
+/// The 1-based line of byte `offset` and the dotted key written there (`table.key`, or the table header).
+pub(super) fn key_at(text: &str, offset: usize) -> (usize, String) {
+    let offset = offset.min(text.len());
+    let before = &text[..offset];
+    let line_no = before.matches('\n').count() + 1;
+    let mut table = String::new();
+    for l in before.lines() {
+        let t = l.trim();
+        if t.starts_with('[') {
+            table = t
+                .trim_start_matches('[')
+                .trim_end_matches(']')
+                .trim()
+                .to_string();
+        }
+    }
+    let line = text.lines().nth(line_no - 1).unwrap_or("").trim();
+    if line.starts_with('[') {
+        let header = line
+            .trim_start_matches('[')
+            .split(']')
+            .next()
+            .unwrap_or("")
+            .trim()
+            .to_string();
+        return (line_no, header);
+    }
+    let key = line.split('=').next().unwrap_or("").trim();
+    let key = if key.is_empty() || line.is_empty() {
+        table
+    } else if table.is_empty() {
+        key.to_string()
+    } else {
+        format!("{table}.{key}")
+    };
+    (line_no, key)
+}
