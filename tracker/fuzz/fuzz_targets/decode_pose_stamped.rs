@@ -2,8 +2,8 @@
 //! Fuzz the CDR `geometry_msgs/msg/PoseStamped` decoder and the rmw_zenoh attachment parser: no panic on any
 //! input, and whatever decodes re-encodes to bytes that decode to the same message (bit for bit, NaNs included).
 
-#[allow(dead_code)]
-#[path = "../../src/publish/ros2.rs"]
+#[allow(dead_code, unused_imports)]
+#[path = "../../src/publish/ros2/mod.rs"]
 mod ros2;
 
 use libfuzzer_sys::fuzz_target;
