@@ -1,0 +1,165 @@
+//! Gathering the events of one ROI for [`EventEdges`]: binning the recent events on the ROI grid, removing
+//! isolated bins and events that belong to a nearer object, and keeping the candidates outside the silhouette.
+
+use super::*;
+
+impl EventEdges {
+    /// Bins the events of `surface` newer than `t_us - window_us` inside `roi` (the render's ROI; `mask` and
+    /// `depth` are the render's mask and depth on the same grid, `id` the object's label) and keeps the candidates
+    /// outside the silhouette. Events on another object's silhouette where it is nearer than `occluder_z` (metres,
+    /// typically this object's centre depth) are that occluder's and are dropped; events on an object behind are
+    /// kept, since this object's own leading edge sweeps over it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn collect(
+        &mut self,
+        term: &EventTerm,
+        surface: &EventSurface,
+        roi: &Roi,
+        mask: &[u16],
+        depth: &[f32],
+        occluder_z: f32,
+        id: u16,
+        t_us: i64,
+        window_us: i64,
+        max_candidates: usize,
+    ) {
+        let (w, h) = (roi.out_width, roi.out_height);
+        let n = w as usize * h as usize;
+        self.width = w;
+        self.height = h;
+        self.roi = Some(*roi);
+        self.hits.clear();
+        self.hits.resize(n, 0);
+        self.kept.clear();
+        self.kept.resize(n, false);
+        self.candidates.clear();
+        self.association.clear();
+        self.contour_match.clear();
+        // Sized once for the largest tick, so steady-state ticks do not allocate.
+        self.candidates.reserve(max_candidates + 1);
+        self.association.reserve(max_candidates + 1);
+        self.stats = EventTermStats::default();
+        let sx = f64::from(w) / roi.width;
+        let sy = f64::from(h) / roi.height;
+        let x0 = roi.x.floor().max(0.0) as i64;
+        let y0 = roi.y.floor().max(0.0) as i64;
+        let x1 = ((roi.x + roi.width).ceil() as i64).min(i64::from(surface.width()));
+        let y1 = ((roi.y + roi.height).ceil() as i64).min(i64::from(surface.height()));
+        // At most about four samples per bin: larger ROIs are visited with a stride.
+        let step = ((1.0 / sx).min(1.0 / sy) / 2.0).floor().max(1.0) as i64;
+        let since = t_us - window_us;
+        // ROI column of every image column of the box (-1 outside), shared by all rows.
+        self.column_bins.clear();
+        self.column_bins.extend((x0..x1.max(x0)).map(|x| {
+            let i = ((x as f64 + 0.5 - roi.x) * sx) as i64;
+            if i >= 0 && i < i64::from(w) {
+                i as i32
+            } else {
+                -1
+            }
+        }));
+        let mut y = y0;
+        while y < y1 {
+            let j = ((y as f64 + 0.5 - roi.y) * sy) as i64;
+            if j >= 0 && j < i64::from(h) && y >= 0 {
+                let row = j as usize * w as usize;
+                let (bins, hits) = (&self.column_bins, &mut self.hits);
+                surface.for_each_recent_in_row(
+                    y as u32,
+                    x0 as u32,
+                    x1.max(x0) as u32,
+                    step as usize,
+                    since,
+                    t_us,
+                    |x| {
+                        let i = bins[(x as i64 - x0) as usize];
+                        if i >= 0 {
+                            let cell = &mut hits[row + i as usize];
+                            *cell = cell.saturating_add(1);
+                        }
+                    },
+                );
+            }
+            y += step;
+        }
+        // Noise filter: a bin is kept if at least `min_neighbours` bins of its 3x3 neighbourhood (itself
+        // included) hold events; counted separably (row sums of occupancy, then column sums).
+        // Branch-free passes over whole rows, which the compiler vectorises. `row_counts` has a zero row above
+        // and below the grid, so every bin has an above and a below.
+        let (wu, hu) = (w as usize, h as usize);
+        self.row_counts.clear();
+        self.row_counts.resize(n + 2 * wu, 0);
+        if wu > 0 {
+            for (occ, out) in self
+                .hits
+                .chunks_exact(wu)
+                .zip(self.row_counts[wu..wu + n].chunks_exact_mut(wu))
+            {
+                for (o, &hit) in out.iter_mut().zip(occ) {
+                    *o = u8::from(hit > 0);
+                }
+                for (o, &hit) in out[1..].iter_mut().zip(occ) {
+                    *o += u8::from(hit > 0);
+                }
+                for (o, &hit) in out.iter_mut().zip(&occ[1..]) {
+                    *o += u8::from(hit > 0);
+                }
+            }
+        }
+        let min = term.min_neighbours;
+        let (mut bins, mut outside) = (0usize, 0usize);
+        for j in 0..hu {
+            let row = j * wu..(j + 1) * wu;
+            let above = &self.row_counts[row.start..row.end];
+            let mid = &self.row_counts[row.start + wu..row.end + wu];
+            let below = &self.row_counts[row.start + 2 * wu..row.end + 2 * wu];
+            let hits = &self.hits[row.clone()];
+            let kept = &mut self.kept[row.clone()];
+            let counts = above
+                .iter()
+                .zip(mid)
+                .zip(below)
+                .map(|((a, m), b)| a + m + b);
+            let cells = kept.iter_mut().zip(hits.iter().zip(counts));
+            if let (Some(labels), Some(depths)) = (mask.get(row.clone()), depth.get(row.clone())) {
+                for ((k, (&hit, count)), (&label, &z)) in cells.zip(labels.iter().zip(depths)) {
+                    let occluder = (label != id) & (label != MASK_EMPTY) & (z < occluder_z);
+                    *k = (hit > 0) & (count >= min) & !occluder;
+                    bins += usize::from(*k);
+                    outside += usize::from(*k & (label != id));
+                }
+            } else {
+                // A mask (or depth) shorter than the grid: bins past its end count as off the object.
+                for ((k, (&hit, count)), i) in cells.zip(row.clone()) {
+                    *k = (hit > 0) & (count >= min);
+                    bins += usize::from(*k);
+                    outside += usize::from(*k && mask.get(i).copied() != Some(id));
+                }
+            }
+        }
+        self.stats.bins += bins;
+        self.stats.outside += outside;
+        let (wi, hi) = (w as i64, h as i64);
+        if term.kind != EventTermKind::Hinge {
+            // Only the hinge uses candidates.
+            return;
+        }
+        let stride = self.stats.outside.div_ceil(max_candidates.max(1)).max(1);
+        let mut seen = 0usize;
+        for j in 0..hi {
+            for i in 0..wi {
+                let k = (j * wi + i) as usize;
+                if !self.kept[k] || mask.get(k).copied() == Some(id) {
+                    continue;
+                }
+                if seen.is_multiple_of(stride) {
+                    self.candidates.push([
+                        roi.x - 0.5 + (i as f64 + 0.5) / sx,
+                        roi.y - 0.5 + (j as f64 + 0.5) / sy,
+                    ]);
+                }
+                seen += 1;
+            }
+        }
+    }
+}
