@@ -87,6 +87,32 @@ fn finite(field: &'static str, value: f64) -> Result<f64, EncodeError> {
     }
 }
 
+/// The position x, y, z quantised with `scale` (metres per LSB) into `min..=max`, in that order.
+fn quantise_position(
+    position: &[f64; 3],
+    scale: f64,
+    min: i64,
+    max: i64,
+) -> Result<[i64; 3], EncodeError> {
+    let mut raw = [0i64; 3];
+    for (i, r) in raw.iter_mut().enumerate() {
+        *r = quantise(POS_NAMES[i], position[i], scale, min, max)?;
+    }
+    Ok(raw)
+}
+
+/// Refuses a state code the layout does not define (0 tracking, 1 degraded, 2 lost).
+fn check_state(state: u8) -> Result<(), EncodeError> {
+    if state > 2 {
+        return Err(EncodeError::OutOfRange {
+            field: "state",
+            value: f64::from(state),
+            limit: 2.0,
+        });
+    }
+    Ok(())
+}
+
 fn quantise(
     field: &'static str,
     value: f64,
@@ -154,26 +180,11 @@ pub fn encode_classic(
     out: &mut [CanFrame; CLASSIC_FRAMES],
 ) -> Result<(), EncodeError> {
     check_ids(base_id, p.object)?;
-    let mut pos = [0i64; 3];
-    for i in 0..3 {
-        pos[i] = quantise(
-            POS_NAMES[i],
-            p.position[i],
-            CLASSIC_POS_SCALE,
-            I24_MIN,
-            I24_MAX,
-        )?;
-    }
+    let pos = quantise_position(&p.position, CLASSIC_POS_SCALE, I24_MIN, I24_MAX)?;
     let q = canonical_quaternion(p.quaternion)?;
     let quat = q.map(|c| ((c / CLASSIC_QUAT_SCALE).round() as i64).clamp(-32767, 32767) as i16);
     let quality = quality_raw(p.quality, CLASSIC_QUALITY_SCALE, 250)? as u8;
-    if p.state > 2 {
-        return Err(EncodeError::OutOfRange {
-            field: "state",
-            value: f64::from(p.state),
-            limit: 2.0,
-        });
-    }
+    check_state(p.state)?;
     for (kind, frame) in ClassicKind::ALL.iter().zip(out.iter_mut()) {
         let id = classic_id(base_id, p.object, *kind);
         let mut d = [0u8; CLASSIC_LEN];
@@ -214,16 +225,12 @@ pub fn encode_classic(
 /// Encodes one pose as one 48-byte CAN FD frame into `out` (BRS flag set).
 pub fn encode_fd(base_id: u16, p: &PoseFields, out: &mut CanFrame) -> Result<(), EncodeError> {
     check_ids(base_id, p.object)?;
-    let mut pos = [0i64; 3];
-    for i in 0..3 {
-        pos[i] = quantise(
-            POS_NAMES[i],
-            p.position[i],
-            FD_POS_SCALE,
-            i64::from(i32::MIN),
-            i64::from(i32::MAX),
-        )?;
-    }
+    let pos = quantise_position(
+        &p.position,
+        FD_POS_SCALE,
+        i64::from(i32::MIN),
+        i64::from(i32::MAX),
+    )?;
     let q = canonical_quaternion(p.quaternion)?;
     let quat = q.map(|c| {
         (c / FD_QUAT_SCALE)
@@ -231,13 +238,7 @@ pub fn encode_fd(base_id: u16, p: &PoseFields, out: &mut CanFrame) -> Result<(),
             .clamp(-f64::from(i32::MAX), f64::from(i32::MAX)) as i32
     });
     let quality = quality_raw(p.quality, FD_QUALITY_SCALE, 10_000)? as u16;
-    if p.state > 2 {
-        return Err(EncodeError::OutOfRange {
-            field: "state",
-            value: f64::from(p.state),
-            limit: 2.0,
-        });
-    }
+    check_state(p.state)?;
     let id = fd_id(base_id, p.object);
     let d = &mut out.data;
     d.fill(0);
