@@ -3,242 +3,29 @@
 //! (`docs/recording-format.md`) with the trigger train, ground truth and the object model.
 
 use crate::depth_sensor::DepthSensorModel;
-use crate::esim::{EsimConfig, EsimStats, EventSimulator};
-use crate::motion::{MotionProfile, SpeedLevel};
-use crate::objects::{self, ObjectKind};
+use crate::esim::EventSimulator;
+use crate::objects;
 use crate::rig::SimRig;
 use crate::rng::SeedRng;
 use drivers::event::{CdEvent, TriggerEdge};
-use drivers::recording::{
-    PoseSample, RecordingError, RecordingMeta, RecordingWriter, TriggerSchedule,
-};
+use drivers::recording::{RecordingMeta, RecordingWriter, TriggerSchedule};
 use drivers::timeline::ideal_edges;
 use nalgebra::Isometry3;
-use serde_json::json;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use tracker::geometry::Roi;
 use tracker::render::{
     BackgroundMesh, Lighting, MASK_EMPTY, RenderError, RenderTarget, Renderer, Scene,
 };
 
-/// Which object to put in the scene.
-#[derive(Debug, Clone, PartialEq)]
-pub enum ObjectSource {
-    /// A procedural library object.
-    Library(ObjectKind),
-    /// A user OBJ (metres), copied into the recording with its MTL and textures.
-    File(PathBuf),
-}
-
-/// A further object in the scene, moving on its own trajectory (with its own hand) beside the first.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Companion {
-    /// The object.
-    pub object: ObjectSource,
-    /// Its motion profile.
-    pub motion: MotionProfile,
-    /// Its speed level.
-    pub speed: SpeedLevel,
-    /// Where its trajectory is centred relative to the first object's, metres, camera frame (negative z:
-    /// nearer the camera, so it passes in front of the first object).
-    pub offset_m: [f64; 3],
-}
-
-impl Companion {
-    /// Parses a command-line companion `NAME[:MOTION[:SPEED[:X,Y,Z]]]` (library name or `.obj` path; offset in
-    /// metres). Motion and speed default to `motion` and `speed`; the offset to [`Self::default_offset`]`(k)`.
-    pub fn parse(
-        spec: &str,
-        k: usize,
-        motion: MotionProfile,
-        speed: SpeedLevel,
-    ) -> Result<Self, String> {
-        let mut parts = spec.split(':');
-        let name = parts.next().unwrap_or_default().trim();
-        let object = match ObjectKind::from_name(name) {
-            Some(kind) => ObjectSource::Library(kind),
-            None if name.ends_with(".obj") => ObjectSource::File(PathBuf::from(name)),
-            None => {
-                return Err(format!(
-                    "`{spec}`: unknown object `{name}` (a library name or a path to an .obj file)"
-                ));
-            }
-        };
-        let motion = match parts.next() {
-            Some(m) => m.parse().map_err(|e| format!("`{spec}`: {e}"))?,
-            None => motion,
-        };
-        let speed = match parts.next() {
-            Some(v) => v.parse().map_err(|e| format!("`{spec}`: {e}"))?,
-            None => speed,
-        };
-        let offset_m = match parts.next() {
-            Some(o) => {
-                let v: Vec<f64> = o
-                    .split(',')
-                    .map(|x| x.trim().parse::<f64>())
-                    .collect::<Result<_, _>>()
-                    .map_err(|e| format!("`{spec}`: offset `{o}`: {e}"))?;
-                <[f64; 3]>::try_from(v)
-                    .map_err(|_| format!("`{spec}`: offset `{o}` must be X,Y,Z in metres"))?
-            }
-            None => Self::default_offset(k),
-        };
-        if let Some(extra) = parts.next() {
-            return Err(format!(
-                "`{spec}`: unexpected `:{extra}` (NAME[:MOTION[:SPEED[:X,Y,Z]]])"
-            ));
-        }
-        Ok(Self {
-            object,
-            motion,
-            speed,
-            offset_m,
-        })
-    }
-
-    /// The offset of the `k`-th companion (from 1) when none is given: 15 cm nearer the camera per companion,
-    /// so that each passes in front of the objects behind it as they move.
-    pub fn default_offset(k: usize) -> [f64; 3] {
-        [0.0, 0.0, -0.15 * k as f64]
-    }
-}
-
-/// What to generate.
-#[derive(Debug, Clone, PartialEq)]
-pub struct GenerateConfig {
-    /// The tracked object.
-    pub object: ObjectSource,
-    /// Further objects (each tracked too, and in the ground truth), empty by default.
-    pub companions: Vec<Companion>,
-    /// Motion profile.
-    pub motion: MotionProfile,
-    /// Speed level.
-    pub speed: SpeedLevel,
-    /// Length, seconds.
-    pub seconds: f64,
-    /// Seed of everything random (trajectory, textures, thresholds, noise).
-    pub seed: u64,
-    /// Event camera model.
-    pub esim: EsimConfig,
-    /// Probability that a depth frame is dropped.
-    pub depth_drop_probability: f64,
-    /// Whether hand-like occluders grip the object.
-    pub hands: bool,
-    /// Largest image motion of any object point between two renders, pixels (ESIM's adaptive sampling).
-    pub max_step_px: f64,
-}
-
-impl GenerateConfig {
-    /// A configuration with the simulator's defaults.
-    pub fn new(
-        object: ObjectSource,
-        motion: MotionProfile,
-        speed: SpeedLevel,
-        seconds: f64,
-        seed: u64,
-    ) -> Self {
-        Self {
-            object,
-            companions: Vec::new(),
-            motion,
-            speed,
-            seconds,
-            seed,
-            esim: EsimConfig::default(),
-            depth_drop_probability: 0.0,
-            hands: true,
-            max_step_px: 0.5,
-        }
-    }
-}
-
-/// What a generation produced.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct GenerateReport {
-    /// Renders of the event camera's changing region.
-    pub renders: u64,
-    /// Mean rendered region, pixels.
-    pub mean_region_px: f64,
-    /// Event counters.
-    pub esim: EsimStats,
-    /// Trigger edges written.
-    pub trigger_edges: u64,
-    /// Depth frames written.
-    pub depth_frames: u64,
-    /// Depth frames dropped on purpose (the sensor model's frame drops).
-    pub depth_frames_dropped: u64,
-    /// Ground-truth rows written.
-    pub ground_truth_rows: u64,
-}
-
-/// Why generation failed.
-#[derive(Debug, thiserror::Error)]
-pub enum GenerateError {
-    /// A parameter is out of range.
-    #[error("invalid parameter: {0}")]
-    Parameter(String),
-    /// The object or a prop could not be built or loaded.
-    #[error(transparent)]
-    Mesh(#[from] tracker::mesh::MeshError),
-    /// Writing the recording failed.
-    #[error(transparent)]
-    Recording(#[from] RecordingError),
-    /// The renderer refused the scene.
-    #[error("rendering failed: {0}")]
-    Render(#[from] RenderError),
-    /// Copying a user mesh failed.
-    #[error("{path}: {error}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What went wrong.
-        error: std::io::Error,
-    },
-}
-
+mod config;
+mod metadata;
 mod optics;
 mod stage;
 
+use config::check;
+pub use config::{Companion, GenerateConfig, GenerateError, GenerateReport, ObjectSource};
 pub use optics::optics_log;
 use stage::{Built, build, copy_user_obj};
-
-fn check(config: &GenerateConfig) -> Result<(), GenerateError> {
-    let bad = |s: &str| Err(GenerateError::Parameter(s.to_string()));
-    if !(config.seconds.is_finite() && config.seconds > 0.0 && config.seconds <= 600.0) {
-        return bad("seconds must be in (0, 600]");
-    }
-    if !(config.max_step_px.is_finite() && config.max_step_px > 0.01 && config.max_step_px <= 5.0) {
-        return bad("max step must be in (0.01, 5] pixels");
-    }
-    if !(0.0..=1.0).contains(&config.depth_drop_probability) {
-        return bad("depth frame drop probability must be in [0, 1]");
-    }
-    for (k, c) in config.companions.iter().enumerate() {
-        let z = super::motion::WORKING_DISTANCE_M + c.offset_m[2];
-        if !(c.offset_m.iter().all(|v| v.is_finite() && v.abs() <= 1.0) && z >= 0.25) {
-            return Err(GenerateError::Parameter(format!(
-                "companion {} offset {:?} m: each coordinate must be within 1 m and the object at least 0.25 m \
-                 from the camera",
-                k + 1,
-                c.offset_m
-            )));
-        }
-    }
-    let e = &config.esim;
-    if e.contrast
-        .is_some_and(|c| !(c.is_finite() && c > 0.01 && c < 2.0))
-        || !(e.contrast_spread.is_finite() && e.contrast_spread >= 0.0)
-        || !(e.refractory_us.is_finite() && e.refractory_us >= 0.0)
-        || !(e.noise_rate_hz.is_finite() && (0.0..=100.0).contains(&e.noise_rate_hz))
-        || !(e.log_eps.is_finite() && e.log_eps > 0.0)
-    {
-        return bad(
-            "event camera parameters out of range (contrast in (0.01, 2), spread >= 0, refractory >= 0, noise in [0, 100] Hz, log eps > 0)",
-        );
-    }
-    Ok(())
-}
 
 /// The event sensor's log intensity over the whole image at `t_s`, exactly as the generator computes it
 /// (render, optics blur, logarithm): for checking recordings against the model.
@@ -517,64 +304,9 @@ pub fn generate(
         0.0
     };
 
-    // Ground truth at 1 kHz plus every tick.
-    let mut times: Vec<i64> = (0..)
-        .map(|k| k * 1000)
-        .take_while(|&t| (t as f64) < t_end_us)
-        .collect();
-    times.extend(edges.iter().filter(|e| e.rising).map(|e| e.t_us));
-    times.sort_unstable();
-    times.dedup();
-    let gt: Vec<PoseSample> = times
-        .iter()
-        .flat_map(|&t| {
-            stage.objects.iter().zip(&scene_objects).map(move |(o, b)| {
-                let p = o.pose(t as f64 * 1e-6);
-                let q = p.rotation.into_inner();
-                PoseSample {
-                    t_us: t,
-                    object: b.name.clone(),
-                    translation: [p.translation.x, p.translation.y, p.translation.z],
-                    rotation_xyzw: [q.i, q.j, q.k, q.w],
-                }
-            })
-        })
-        .collect();
+    let gt = metadata::ground_truth(&stage.objects, &scene_objects, &edges, t_end_us);
     report.ground_truth_rows = gt.len() as u64;
-    let mut parameters = serde_json::Map::new();
-    for (k, v) in [
-        ("object", json!(scene_objects[0].name)),
-        ("motion", json!(config.motion.name())),
-        ("speed", json!(config.speed.name())),
-        ("seconds", json!(config.seconds)),
-        ("seed", json!(config.seed)),
-        ("contrast_threshold", json!(sim.contrast())),
-        ("contrast_spread", json!(config.esim.contrast_spread)),
-        ("refractory_us", json!(config.esim.refractory_us)),
-        ("noise_rate_hz", json!(config.esim.noise_rate_hz)),
-        ("hands", json!(config.hands)),
-        ("max_step_px", json!(config.max_step_px)),
-        ("renders", json!(report.renders)),
-        ("signal_events", json!(report.esim.signal_events)),
-        ("noise_events", json!(report.esim.noise_events)),
-        ("refractory_dropped", json!(report.esim.refractory_dropped)),
-        ("depth_frames_dropped", json!(report.depth_frames_dropped)),
-    ] {
-        parameters.insert(k.to_string(), v);
-    }
-    // Only recordings with companions carry them (a single-object recording's metadata is unchanged).
-    if !config.companions.is_empty() {
-        let companions: Vec<_> = config
-            .companions
-            .iter()
-            .zip(&scene_objects[1..])
-            .map(|(c, b)| {
-                json!({"object": b.name, "motion": c.motion.name(), "speed": c.speed.name(),
-                       "offset_m": c.offset_m})
-            })
-            .collect();
-        parameters.insert("companions".into(), json!(companions));
-    }
+    let parameters = metadata::parameters(config, &scene_objects, sim.contrast(), &report);
     let meta = RecordingMeta {
         generator: format!("hil-sim {}", env!("CARGO_PKG_VERSION")),
         trigger: schedule,
@@ -583,39 +315,4 @@ pub fn generate(
     let infos: Vec<_> = scene_objects.into_iter().map(|o| o.info).collect();
     writer.finish(&meta, &infos, Some(&gt))?;
     Ok(report)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn companion_specs_parse_with_defaults_and_name_what_is_wrong() {
-        let (m, s) = (MotionProfile::Shake, SpeedLevel::Slow);
-        let c = Companion::parse("can", 2, m, s).unwrap();
-        assert_eq!(c.object, ObjectSource::Library(ObjectKind::Can));
-        assert_eq!((c.motion, c.speed), (m, s));
-        assert_eq!(c.offset_m, [0.0, 0.0, -0.3]);
-        let c = Companion::parse("bowl:hand-switch:fast:0.05,-0.02,-0.1", 1, m, s).unwrap();
-        assert_eq!(c.object, ObjectSource::Library(ObjectKind::Bowl));
-        assert_eq!(
-            (c.motion, c.speed),
-            (MotionProfile::HandSwitch, SpeedLevel::Fast)
-        );
-        assert_eq!(c.offset_m, [0.05, -0.02, -0.1]);
-        let c = Companion::parse("parts/gear.obj:rotation", 1, m, s).unwrap();
-        assert_eq!(c.object, ObjectSource::File("parts/gear.obj".into()));
-        assert_eq!(c.motion, MotionProfile::Rotation);
-        for (spec, needle) in [
-            ("teapot", "unknown object `teapot`"),
-            ("can:wobble", "unknown motion profile `wobble`"),
-            ("can:shake:warp", "unknown speed level `warp`"),
-            ("can:shake:slow:1,2", "must be X,Y,Z"),
-            ("can:shake:slow:1,x,2", "offset `1,x,2`"),
-            ("can:shake:slow:0,0,0:more", "unexpected `:more`"),
-        ] {
-            let e = Companion::parse(spec, 1, m, s).unwrap_err();
-            assert!(e.contains(needle) && e.contains(spec), "{spec}: {e}");
-        }
-    }
 }
