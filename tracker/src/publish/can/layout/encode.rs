@@ -211,12 +211,7 @@ pub fn encode_classic(
             }
         }
         d[0] = frame_crc(id, &d[1..]);
-        frame.id = u32::from(id);
-        frame.extended = false;
-        frame.fd = false;
-        frame.fd_flags = 0;
-        frame.remote = false;
-        frame.len = CLASSIC_LEN as u8;
+        set_header(frame, id, false, CLASSIC_LEN);
         frame.data[..CLASSIC_LEN].copy_from_slice(&d);
     }
     Ok(())
@@ -255,13 +250,19 @@ pub fn encode_fd(base_id: u16, p: &PoseFields, out: &mut CanFrame) -> Result<(),
         d[32 + 4 * i..36 + 4 * i].copy_from_slice(&quat[i].to_le_bytes());
     }
     d[0] = frame_crc(id, &d[1..FD_LEN]);
-    out.id = u32::from(id);
-    out.extended = false;
-    out.fd = true;
-    out.fd_flags = 0x01;
-    out.remote = false;
-    out.len = FD_LEN as u8;
+    set_header(out, id, true, FD_LEN);
     Ok(())
+}
+
+/// Sets the header of one of our data frames: standard 11-bit `id`, `len` payload bytes, and for FD the bit-rate
+/// switch (BRS) flag.
+fn set_header(frame: &mut CanFrame, id: u16, fd: bool, len: usize) {
+    frame.id = u32::from(id);
+    frame.extended = false;
+    frame.fd = fd;
+    frame.fd_flags = if fd { 0x01 } else { 0 };
+    frame.remote = false;
+    frame.len = len as u8;
 }
 
 /// Up to four frames of one encoded pose (four classic frames or one FD frame), inline.
