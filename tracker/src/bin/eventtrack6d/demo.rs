@@ -15,7 +15,7 @@ use tracker::runtime::config::{Config, Pace};
 /// poses go to a CSV file, over zenoh (ROS 2 PoseStamped, rmw_zenoh keys) and as CAN frames to a candump log.
 #[derive(Debug, Args)]
 pub struct DemoArgs {
-    /// Output directory for poses.csv and poses.candump.log (default: <cache>/run).
+    /// Output directory for poses.csv, poses.candump.log and overlay.png (default: <cache>/run).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Where the generated sequence is cached (default: target/demo next to the executable, else

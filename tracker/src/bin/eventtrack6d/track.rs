@@ -17,7 +17,7 @@ use tracker::track::{
 /// as a pose CSV (`t_us,object,x,y,z,qx,qy,qz,qw,quality,state`). Runs as fast as possible (no real-time pacing).
 #[derive(Debug, Args)]
 pub struct TrackArgs {
-    /// Recording directory (events.raw, depth/, rig.json, models/).
+    /// Recording directory (events.raw, depth/, camera.json, models/).
     pub recording: PathBuf,
     /// Tracking method: eventtrack6d (events + depth), depth30 (depth frames only, pose held in between) or
     /// events-only (no depth after the first frame).
