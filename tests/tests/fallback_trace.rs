@@ -1,7 +1,8 @@
 //! The depth safety net's decision record (`PoseTracker::depth_fallback_checks`, written by `eventtrack6d track
 //! --fallback-trace`) says what the tracker did: one check per object at each fresh depth frame after the first,
-//! a replacement exactly when a candidate beat the estimate by the margin, the published pose is then that
-//! candidate's, and the replacements add up to the tracker's counter.
+//! a replacement exactly when a candidate whose motion the surroundings do not contradict beat the estimate by the
+//! margin, the published pose is then that candidate's, and the replacements add up to the tracker's counter.
+//! The candidates refused for their motion were the wrong ones: farther from the truth than the estimate kept.
 
 use drivers::recording::Recording;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
@@ -10,8 +11,8 @@ use hil_sim::objects::ObjectKind;
 use tracker::eval::{PoseTrack, recording_ticks};
 use tracker::render::CpuRenderer;
 use tracker::track::{
-    DepthFallbackCheck, EventTrack6d, TrackerConfig, recording_object, recording_rig,
-    track_recording,
+    DepthFallbackCheck, EventTrack6d, FallbackCandidate, TrackerConfig, recording_object,
+    recording_rig, track_recording,
 };
 
 /// A marker held in a hand, translating at moderate speed for 1 s (seed 1031, the dev suite's marker
@@ -42,6 +43,7 @@ fn the_fallback_record_matches_what_the_tracker_published() {
     let rig = recording_rig(&recording).expect("rig");
     let config = TrackerConfig::default();
     let margin = config.depth_fallback_margin;
+    let motion_margin = config.depth_fallback_motion_margin;
     let mut tracker = EventTrack6d::new(config, rig, vec![object], Box::new(CpuRenderer::new()))
         .expect("tracker");
 
@@ -50,6 +52,8 @@ fn the_fallback_record_matches_what_the_tracker_published() {
     let mut depth_ticks = 0usize;
     let mut replaced = 0u64;
     let mut kept = 0u64;
+    // (candidate's distance to the truth, estimate's), metres, for each candidate refused for its motion.
+    let mut refused = Vec::new();
     track_recording(
         &recording,
         &mut tracker,
@@ -73,7 +77,16 @@ fn the_fallback_record_matches_what_the_tracker_published() {
                 ticks_with_check.push(tick.index);
                 assert_eq!(c.t_us, tick.t_us);
                 assert_eq!(c.object, 0);
-                check_decision(c, margin, &estimates[0].pose);
+                check_decision(c, margin, motion_margin, &estimates[0].pose);
+                let at = truth.interpolated_at(c.t_us).expect("truth at the check");
+                let off = |p: &nalgebra::Isometry3<f64>| {
+                    (p.translation.vector - at.translation.vector).norm()
+                };
+                for cand in c.candidates.iter().flatten() {
+                    if !motion_ok(c, cand, motion_margin) {
+                        refused.push((off(&cand.pose), off(&c.estimate)));
+                    }
+                }
                 match c.replaced_by {
                     Some(_) => replaced += 1,
                     None => kept += 1,
@@ -93,16 +106,64 @@ fn the_fallback_record_matches_what_the_tracker_published() {
         replaced >= 1 && kept >= 1,
         "replaced {replaced}, kept {kept}"
     );
+    // The hand holding the marker offers more agreeing depth than the marker: the motion check refuses the
+    // candidates that slid onto it. At least three in four refusals are of a candidate more than 1 cm farther
+    // from the truth than the estimate kept, and none stops a recovery (a candidate within 5 mm of the truth
+    // refused while the estimate is more than 3 cm off).
+    assert!(
+        refused.len() >= 10,
+        "{} candidates refused for their motion",
+        refused.len()
+    );
+    let wrong = refused
+        .iter()
+        .filter(|(cand, est)| *cand > est + 0.01)
+        .count();
+    assert!(
+        wrong * 4 >= refused.len() * 3,
+        "only {wrong} of {} refused candidates were the wrong ones: {refused:?}",
+        refused.len()
+    );
+    for (cand, est) in &refused {
+        assert!(
+            !(*cand < 0.005 && *est > 0.03),
+            "a candidate {:.1} mm off refused, the estimate kept {:.1} mm off",
+            cand * 1e3,
+            est * 1e3
+        );
+    }
+}
+
+/// Whether the motion check lets `cand` compete: its motion agreement falls short of the estimate's by at most
+/// `motion_margin` (or either is unknown).
+fn motion_ok(c: &DepthFallbackCheck, cand: &FallbackCandidate, motion_margin: f64) -> bool {
+    match (c.estimate_motion_agreeing, cand.motion_agreeing) {
+        (Some(m), Some(a)) => a >= m - motion_margin,
+        _ => true,
+    }
 }
 
 /// One check is consistent with the rule and with the published pose.
-fn check_decision(c: &DepthFallbackCheck, margin: f64, published: &nalgebra::Isometry3<f64>) {
+fn check_decision(
+    c: &DepthFallbackCheck,
+    margin: f64,
+    motion_margin: f64,
+    published: &nalgebra::Isometry3<f64>,
+) {
     assert!((0.0..=1.0).contains(&c.estimate_agreeing));
-    let candidates: Vec<_> = c.candidates.iter().flatten().collect();
-    assert!(!candidates.is_empty(), "a check without candidates");
-    for cand in &candidates {
+    let all: Vec<_> = c.candidates.iter().flatten().collect();
+    assert!(!all.is_empty(), "a check without candidates");
+    for cand in &all {
         assert!((0.0..=1.0).contains(&cand.agreeing));
+        assert!(
+            cand.motion_agreeing
+                .is_none_or(|m| (0.0..=1.0).contains(&m))
+        );
     }
+    let candidates: Vec<_> = all
+        .into_iter()
+        .filter(|cand| motion_ok(c, cand, motion_margin))
+        .collect();
     let best = candidates
         .iter()
         .map(|cand| cand.agreeing)
@@ -119,6 +180,11 @@ fn check_decision(c: &DepthFallbackCheck, margin: f64, published: &nalgebra::Iso
                 c.t_us
             );
             assert!(winner.agreeing > c.estimate_agreeing + margin);
+            assert!(
+                motion_ok(c, &winner, motion_margin),
+                "t {}: a refused candidate won",
+                c.t_us
+            );
             assert!(
                 gap(&winner.pose, published) < 1e-6,
                 "t {}: published pose is not the replacing candidate's",

@@ -59,14 +59,14 @@ pub struct CarriedDepth {
 }
 
 /// Most depth points kept around one object per exposure (the depth image is subsampled above this).
-const MAX_POINTS: usize = 12_000;
+pub const MAX_CARRIED_POINTS: usize = 12_000;
 
 impl CarriedDepth {
     /// An empty reconstruction (no depth frame yet).
     pub fn new() -> Self {
         Self {
-            static_points: Vec::with_capacity(MAX_POINTS),
-            object_points: Vec::with_capacity(MAX_POINTS),
+            static_points: Vec::with_capacity(MAX_CARRIED_POINTS),
+            object_points: Vec::with_capacity(MAX_CARRIED_POINTS),
             ..Self::default()
         }
     }
@@ -122,7 +122,7 @@ impl CarriedDepth {
             return;
         }
         let area = ((u1 - u0 + 1) * (v1 - v0 + 1)) as f64;
-        let stride = (area / MAX_POINTS as f64).sqrt().ceil().max(1.0) as i64;
+        let stride = (area / MAX_CARRIED_POINTS as f64).sqrt().ceil().max(1.0) as i64;
         self.stride = stride as u32;
         let iso = rig.event_from_depth.cast::<f32>();
         let (fx, fy, cx, cy) = (cam.fx as f32, cam.fy as f32, cam.cx as f32, cam.cy as f32);
@@ -133,7 +133,11 @@ impl CarriedDepth {
             let mut u = u0;
             while u <= u1 {
                 let z = frame.depth_m[v as usize * w + u as usize];
-                if z > 0.0 && z >= z_lo && z <= z_hi && self.static_points.len() < MAX_POINTS {
+                if z > 0.0
+                    && z >= z_lo
+                    && z <= z_hi
+                    && self.static_points.len() < MAX_CARRIED_POINTS
+                {
                     let p = Point3::new((u as f32 - cx) * z / fx, (v as f32 - cy) * z / fy, z);
                     self.static_points.push(iso * p);
                 }
@@ -167,6 +171,18 @@ impl CarriedDepth {
                 i += 1;
             }
         }
+    }
+
+    /// Appends every point of `D_0`, static ones included, to `out` in the object frame at the exposure
+    /// (`pose_at_exposure`: the pose [`Self::attach_to_object`] split them with), metres.
+    pub fn points_in_object_frame(
+        &self,
+        pose_at_exposure: &Isometry3<f64>,
+        out: &mut Vec<Point3<f32>>,
+    ) {
+        let inv = pose_at_exposure.inverse().cast::<f32>();
+        out.extend(self.static_points.iter().map(|p| inv * p));
+        out.extend_from_slice(&self.object_points);
     }
 
     /// Renders `D_t` into `out` for the (ROI) camera `camera`: static points where they were, object points moved

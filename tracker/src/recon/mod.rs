@@ -3,6 +3,8 @@
 
 mod depth;
 mod intensity;
+mod neighbourhood;
 
-pub use depth::{CarriedDepth, DepthImage, DepthRig};
+pub use depth::{CarriedDepth, DepthImage, DepthRig, MAX_CARRIED_POINTS};
 pub use intensity::{EventSurface, IntensityFilterConfig};
+pub use neighbourhood::{MIN_MOTION_POINTS, MOTION_TOLERANCE_M, MovingNeighbourhood};

@@ -94,6 +94,12 @@ pub struct TrackerConfig {
     /// event-driven estimate when its fraction of agreeing model points is higher by more than this; negative
     /// disables the check.
     pub depth_fallback_margin: f64,
+    /// A depth-only candidate may replace the estimate only if the depth around the object confirms the motion
+    /// it implies since the previous depth frame nearly as well as the estimate's: its motion agreement (the
+    /// fraction of the previous frame's moved surfaces the new frame confirms, [`crate::recon::MovingNeighbourhood`])
+    /// falls short of the estimate's by at most this. Keeps the safety net from sliding the object onto the hand
+    /// that holds it, which moves with it. Negative disables the check.
+    pub depth_fallback_motion_margin: f64,
     /// Whether the depth-only fallback also starts from the previous depth frame's pose carried on at the velocity
     /// measured between depth frames (and keeps the better of its two results).
     pub depth_fallback_extrapolate: bool,
@@ -168,6 +174,7 @@ impl Default for TrackerConfig {
             events: true,
             prediction: true,
             depth_fallback_margin: 0.05,
+            depth_fallback_motion_margin: 0.3,
             depth_fallback_extrapolate: true,
             roi_widen_at_depth: false,
             search_wide_when_degraded: false,

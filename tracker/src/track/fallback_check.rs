@@ -33,6 +33,10 @@ pub struct FallbackCandidate {
     pub pose: Isometry3<f64>,
     /// Fraction of the model's visible points the depth image confirms at `pose`, in [0, 1].
     pub agreeing: f64,
+    /// Fraction of the previous frame's moved surfaces the depth image confirms under the motion to `pose`, in
+    /// [0, 1] ([`crate::recon::MovingNeighbourhood::motion_agreement`]); `None` when too few could be scored or
+    /// the check is off.
+    pub motion_agreeing: Option<f64>,
 }
 
 /// One object's safety-net check at one fresh depth frame.
@@ -46,6 +50,8 @@ pub struct DepthFallbackCheck {
     pub estimate: Isometry3<f64>,
     /// Fraction of the model's visible points the depth image confirms at `estimate`, in [0, 1].
     pub estimate_agreeing: f64,
+    /// The same motion agreement for `estimate` as [`FallbackCandidate::motion_agreeing`].
+    pub estimate_motion_agreeing: Option<f64>,
     /// The candidates, in the order they were refined (`None`: that start is not configured).
     pub candidates: [Option<FallbackCandidate>; 2],
     /// Index into `candidates` of the one that replaced the estimate; `None` if the estimate was kept.
@@ -53,7 +59,7 @@ pub struct DepthFallbackCheck {
 }
 
 /// Header of the fallback trace CSV.
-pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced";
+pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced,estimate_motion_agreeing,candidate_motion_agreeing";
 
 impl DepthFallbackCheck {
     /// Appends one CSV row per candidate (columns of [`FALLBACK_TRACE_HEADER`]) to `out`; `name` is the object's
@@ -72,7 +78,7 @@ impl DepthFallbackCheck {
             // Writing into a String cannot fail.
             let _ = writeln!(
                 out,
-                "{},{},{:.6},{:.6},{:.6},{:.4},{},{:.6},{:.6},{:.6},{:.4},{:.3},{}",
+                "{},{},{:.6},{:.6},{:.6},{:.4},{},{:.6},{:.6},{:.6},{:.4},{:.3},{},{},{}",
                 self.t_us,
                 name,
                 e.x,
@@ -86,9 +92,16 @@ impl DepthFallbackCheck {
                 c.agreeing,
                 angle,
                 u8::from(self.replaced_by == Some(k)),
+                optional_fraction(self.estimate_motion_agreeing),
+                optional_fraction(c.motion_agreeing),
             );
         }
     }
+}
+
+/// A fraction with four decimals, or nothing (an empty CSV field) when unknown.
+fn optional_fraction(v: Option<f64>) -> String {
+    v.map(|v| format!("{v:.4}")).unwrap_or_default()
 }
 
 #[cfg(test)]
@@ -111,11 +124,13 @@ mod tests {
             t_us: 33_833,
             estimate,
             estimate_agreeing: 0.35,
+            estimate_motion_agreeing: Some(0.9),
             candidates: [
                 Some(FallbackCandidate {
                     start: FallbackStart::PreviousDepthPose,
                     pose: turned,
                     agreeing: 0.52,
+                    motion_agreeing: Some(0.85),
                 }),
                 None,
             ],
@@ -132,6 +147,7 @@ mod tests {
         assert_eq!(cols[7], "0.120000");
         assert_eq!(cols[11], "10.000");
         assert_eq!(cols[12], "1");
+        assert_eq!(&cols[13..], &["0.9000", "0.8500"]);
 
         let kept = DepthFallbackCheck {
             replaced_by: None,
@@ -141,14 +157,18 @@ mod tests {
                     start: FallbackStart::Extrapolated,
                     pose: estimate,
                     agreeing: 0.33,
+                    motion_agreeing: None,
                 }),
             ],
             ..check
         };
         let mut out = String::new();
         kept.write_csv_rows("marker", &mut out);
-        let replaced: Vec<&str> = out.lines().map(|l| l.rsplit(',').next().unwrap()).collect();
+        let cols: Vec<Vec<&str>> = out.lines().map(|l| l.split(',').collect()).collect();
+        let replaced: Vec<&str> = cols.iter().map(|c| c[12]).collect();
         assert_eq!(replaced, ["0", "0"]);
+        // An unknown motion agreement is an empty field.
+        assert_eq!(&cols[1][13..], &["0.9000", ""]);
         assert!(out.lines().nth(1).unwrap().contains(",extrapolated,"));
     }
 }

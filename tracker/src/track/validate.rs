@@ -80,6 +80,12 @@ impl TrackerConfig {
             "must be a finite number",
         )?;
         check(
+            "depth_fallback_motion_margin",
+            self.depth_fallback_motion_margin,
+            |_| true,
+            "must be a finite number",
+        )?;
+        check(
             "carried_depth_weight",
             self.carried_depth_weight,
             non_neg,

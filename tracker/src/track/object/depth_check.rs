@@ -3,8 +3,10 @@
 
 use super::{ObjectTrack, TickInputs, add_prior};
 use crate::geometry::PinholeCamera;
+use crate::recon::DepthRig;
 use crate::refine::{DepthTermStats, NormalEquations, StepBounds, apply_step, solve_step};
 use crate::track::config::TrackerConfig;
+use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Vector6};
 
 impl ObjectTrack {
@@ -25,6 +27,47 @@ impl ObjectTrack {
             &mut scratch,
         );
         (s.inliers as f64 / s.points.max(1) as f64, s)
+    }
+
+    /// At a fresh depth frame, keeps the previous frame's surfaces around the object that moved since (the carried
+    /// depth, before the new frame replaces it), for [`Self::motion_agreement_at`]; forgets them when there is no
+    /// previous frame to compare with or the check is off.
+    pub(super) fn capture_neighbourhood(
+        &mut self,
+        frame: &DepthFrame,
+        rig: &DepthRig,
+        config: &TrackerConfig,
+    ) {
+        match self.anchor {
+            Some((t_anchor, anchor))
+                if config.depth_fallback_motion_margin >= 0.0
+                    && self.carried.exposure_us() == Some(t_anchor) =>
+            {
+                self.neighbourhood
+                    .capture(&self.carried, &anchor, frame, rig);
+            }
+            _ => self.neighbourhood.clear(),
+        }
+    }
+
+    /// How well this tick's depth frame confirms the motion from the previous depth frame's estimate to `pose`
+    /// ([`crate::recon::MovingNeighbourhood::motion_agreement`]); `None` without a depth frame or kept surfaces.
+    pub(super) fn motion_agreement_at(
+        &self,
+        pose: &Isometry3<f64>,
+        inputs: &TickInputs<'_>,
+        config: &TrackerConfig,
+    ) -> Option<f64> {
+        let frame = inputs.depth?;
+        if self.neighbourhood.is_empty() {
+            return None;
+        }
+        self.neighbourhood.motion_agreement(
+            pose,
+            frame,
+            inputs.depth_rig,
+            config.depth_term.occlusion_gap as f32,
+        )
     }
 
     /// Depth-only refinement from `start` against `self.depth_now` (what `depth30` does at a depth frame): the

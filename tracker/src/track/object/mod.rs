@@ -9,7 +9,7 @@ use super::estimate::{ReportedState, TrackingState};
 use super::fallback_check::DepthFallbackCheck;
 use crate::geometry::{PinholeCamera, Roi};
 use crate::mesh::Symmetry;
-use crate::recon::{CarriedDepth, DepthImage, DepthRig, EventSurface};
+use crate::recon::{CarriedDepth, DepthImage, DepthRig, EventSurface, MovingNeighbourhood};
 use crate::refine::{
     DepthTermStats, EventEdges, IntensityEdges, ModelView, NormalEquations, apply_step,
 };
@@ -61,6 +61,8 @@ pub(crate) struct ObjectTrack {
     pub target: RenderTarget,
     view: ModelView,
     carried: CarriedDepth,
+    /// The previous depth frame's moved surfaces around the object, for the safety net's motion check.
+    neighbourhood: MovingNeighbourhood,
     depth_now: DepthImage,
     edges: EventEdges,
     intensity_edges: IntensityEdges,
@@ -124,6 +126,7 @@ impl ObjectTrack {
             target: RenderTarget::with_capacity(config.roi_size, config.roi_size),
             view: ModelView::with_capacity(config.max_surface_points, config.max_contour_points),
             carried: CarriedDepth::new(),
+            neighbourhood: MovingNeighbourhood::new(),
             depth_now: DepthImage {
                 width: config.roi_size,
                 height: config.roi_size,

@@ -40,6 +40,7 @@ impl ObjectTrack {
         let mut depth_weight = 0.0;
         if fresh {
             if let Some(frame) = inputs.depth {
+                self.capture_neighbourhood(frame, inputs.depth_rig, config);
                 self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
                 self.carried
                     .render(&predicted, &roi_camera, &mut self.depth_now);
@@ -257,11 +258,13 @@ impl ObjectTrack {
                 }),
             ];
             let (main_fit, main_stats) = self.depth_fit_at(&pose, &roi_camera, config);
+            let main_motion = self.motion_agreement_at(&pose, inputs, config);
             let mut check = DepthFallbackCheck {
                 object: usize::from(self.label) - 1,
                 t_us: inputs.t_us,
                 estimate: pose,
                 estimate_agreeing: main_fit,
+                estimate_motion_agreeing: main_motion,
                 candidates: [None; 2],
                 replaced_by: None,
             };
@@ -269,12 +272,20 @@ impl ObjectTrack {
             for (k, start) in starts.into_iter().enumerate() {
                 let Some((kind, from)) = start else { continue };
                 let (fit, refined, stats) = self.refine_on_depth(from, &roi_camera, config);
+                let motion = self.motion_agreement_at(&refined, inputs, config);
                 check.candidates[k] = Some(FallbackCandidate {
                     start: kind,
                     pose: refined,
                     agreeing: fit,
+                    motion_agreeing: motion,
                 });
-                if best.is_none_or(|(_, b, _, _)| fit > b) {
+                // A candidate whose motion the surroundings contradict (it slid onto what holds the object) is
+                // not taken, however much depth its model points find there.
+                let motion_ok = match (main_motion, motion) {
+                    (Some(m), Some(c)) => c >= m - config.depth_fallback_motion_margin,
+                    _ => true,
+                };
+                if motion_ok && best.is_none_or(|(_, b, _, _)| fit > b) {
                     best = Some((k, fit, refined, stats));
                 }
             }
