@@ -173,16 +173,15 @@ impl CarriedDepth {
         }
     }
 
-    /// Appends every point of `D_0`, static ones included, to `out` in the object frame at the exposure
-    /// (`pose_at_exposure`: the pose [`Self::attach_to_object`] split them with), metres.
-    pub fn points_in_object_frame(
-        &self,
-        pose_at_exposure: &Isometry3<f64>,
-        out: &mut Vec<Point3<f32>>,
-    ) {
-        let inv = pose_at_exposure.inverse().cast::<f32>();
-        out.extend(self.static_points.iter().map(|p| inv * p));
-        out.extend_from_slice(&self.object_points);
+    /// The points of `D_0` that stay where they were, event camera frame, metres.
+    pub fn static_points(&self) -> &[Point3<f32>] {
+        &self.static_points
+    }
+
+    /// The points of `D_0` that move with the object, object frame at the exposure (the pose
+    /// [`Self::attach_to_object`] split them with), metres.
+    pub fn object_points(&self) -> &[Point3<f32>] {
+        &self.object_points
     }
 
     /// Renders `D_t` into `out` for the (ROI) camera `camera`: static points where they were, object points moved

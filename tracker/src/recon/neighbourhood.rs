@@ -6,7 +6,7 @@
 use super::{CarriedDepth, DepthRig, MAX_CARRIED_POINTS};
 use crate::geometry::PinholeCamera;
 use drivers::recording::DepthFrame;
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Matrix3, Point3, Vector3};
 
 /// Largest difference between a carried point's depth and the new frame's measurement for the frame to confirm
 /// it, metres (the depth camera's noise at working distance is a few millimetres; a wrong motion moves surfaces
@@ -62,13 +62,23 @@ impl MovingNeighbourhood {
     ) {
         self.points.clear();
         self.anchor = *anchor;
-        carried.points_in_object_frame(anchor, &mut self.points);
-        let to_depth = (rig.event_from_depth.inverse() * anchor).cast::<f32>();
-        self.points.retain(|q| {
-            let p = to_depth * q;
-            measured(frame, &rig.camera, &p)
+        let from_event = Rigid::new(&rig.event_from_depth.inverse());
+        let from_object = Rigid::new(&(rig.event_from_depth.inverse() * anchor));
+        let to_object = Rigid::new(&anchor.inverse());
+        let moved = |p: &Point3<f32>| {
+            measured(frame, &rig.camera, p)
                 .is_some_and(|z| !(z > 0.0 && (z - p.z).abs() < MOTION_TOLERANCE_M))
-        });
+        };
+        for p in carried.static_points() {
+            if moved(&from_event.apply(p)) {
+                self.points.push(to_object.apply(p));
+            }
+        }
+        for q in carried.object_points() {
+            if moved(&from_object.apply(q)) {
+                self.points.push(*q);
+            }
+        }
     }
 
     /// How well `frame` confirms the motion from the anchor to `pose` (`T_cam_obj` at the new frame): the fraction
@@ -82,10 +92,10 @@ impl MovingNeighbourhood {
         rig: &DepthRig,
         occlusion_gap: f32,
     ) -> Option<f64> {
-        let to_depth = (rig.event_from_depth.inverse() * pose).cast::<f32>();
+        let to_depth = Rigid::new(&(rig.event_from_depth.inverse() * pose));
         let (mut agree, mut scored) = (0usize, 0usize);
         for q in &self.points {
-            let p = to_depth * q;
+            let p = to_depth.apply(q);
             let Some(z) = measured(frame, &rig.camera, &p) else {
                 continue;
             };
@@ -103,6 +113,25 @@ impl MovingNeighbourhood {
     /// The object's pose at the previous frame the points are kept relative to.
     pub fn anchor(&self) -> &Isometry3<f64> {
         &self.anchor
+    }
+}
+
+/// A rigid transform as a rotation matrix and a translation in `f32` (cheaper per point than the quaternion).
+struct Rigid {
+    r: Matrix3<f32>,
+    t: Vector3<f32>,
+}
+
+impl Rigid {
+    fn new(iso: &Isometry3<f64>) -> Self {
+        Self {
+            r: iso.rotation.to_rotation_matrix().into_inner().cast::<f32>(),
+            t: iso.translation.vector.cast::<f32>(),
+        }
+    }
+
+    fn apply(&self, p: &Point3<f32>) -> Point3<f32> {
+        Point3::from(self.r * p.coords + self.t)
     }
 }
 
