@@ -31,7 +31,8 @@ pub struct FallbackCandidate {
     pub start: FallbackStart,
     /// The refined pose, `T_cam_obj` (event camera frame), metres.
     pub pose: Isometry3<f64>,
-    /// Fraction of the model's visible points the depth image confirms at `pose`, in [0, 1].
+    /// Fraction of the model's visible points the depth image confirms at `pose`, among those not hidden by a
+    /// nearer measurement (at least 30 % of them), in [0, 1].
     pub agreeing: f64,
     /// Fraction of the previous frame's moved surfaces the depth image confirms under the motion to `pose`, in
     /// [0, 1] ([`crate::recon::MovingNeighbourhood::motion_agreement`]); `None` when too few could be scored or
@@ -48,7 +49,7 @@ pub struct DepthFallbackCheck {
     pub t_us: i64,
     /// The event-driven estimate before the check, `T_cam_obj`, metres.
     pub estimate: Isometry3<f64>,
-    /// Fraction of the model's visible points the depth image confirms at `estimate`, in [0, 1].
+    /// The same agreeing fraction for `estimate` as [`FallbackCandidate::agreeing`].
     pub estimate_agreeing: f64,
     /// The same motion agreement for `estimate` as [`FallbackCandidate::motion_agreeing`].
     pub estimate_motion_agreeing: Option<f64>,
@@ -62,6 +63,31 @@ pub struct DepthFallbackCheck {
 pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced,estimate_motion_agreeing,candidate_motion_agreeing";
 
 impl DepthFallbackCheck {
+    /// Index into `candidates` of the one that replaces the estimate, by the safety net's rule; `None` keeps it.
+    ///
+    /// A candidate is eligible unless the surroundings contradict its motion: its motion agreement is more than
+    /// `motion_margin` below the estimate's (either unknown, or a negative `motion_margin`: eligible). The
+    /// eligible candidate with the highest `agreeing` replaces the estimate if it exceeds the estimate's by more
+    /// than `margin`; on a tie the first wins.
+    pub fn replacement(&self, margin: f64, motion_margin: f64) -> Option<usize> {
+        let eligible =
+            |c: &FallbackCandidate| match (self.estimate_motion_agreeing, c.motion_agreeing) {
+                (Some(m), Some(x)) if motion_margin >= 0.0 => x >= m - motion_margin,
+                _ => true,
+            };
+        let mut best: Option<(usize, f64)> = None;
+        for (k, c) in self.candidates.iter().enumerate() {
+            let Some(c) = c.filter(eligible) else {
+                continue;
+            };
+            if best.is_none_or(|(_, b)| c.agreeing > b) {
+                best = Some((k, c.agreeing));
+            }
+        }
+        best.filter(|&(_, b)| b > self.estimate_agreeing + margin)
+            .map(|(k, _)| k)
+    }
+
     /// Appends one CSV row per candidate (columns of [`FALLBACK_TRACE_HEADER`]) to `out`; `name` is the object's
     /// name. Positions are the translations of the poses, metres; `rotation_to_estimate_deg` is the angle between
     /// the candidate's and the estimate's orientation.
@@ -170,5 +196,77 @@ mod tests {
         // An unknown motion agreement is an empty field.
         assert_eq!(&cols[1][13..], &["0.9000", ""]);
         assert!(out.lines().nth(1).unwrap().contains(",extrapolated,"));
+    }
+
+    fn candidate(start: FallbackStart, agreeing: f64, motion: Option<f64>) -> FallbackCandidate {
+        FallbackCandidate {
+            start,
+            pose: Isometry3::identity(),
+            agreeing,
+            motion_agreeing: motion,
+        }
+    }
+
+    #[test]
+    fn replacement_takes_the_best_eligible_candidate_above_the_margin() {
+        let check =
+            |estimate: f64, motion: Option<f64>, a: FallbackCandidate, b: FallbackCandidate| {
+                DepthFallbackCheck {
+                    object: 0,
+                    t_us: 0,
+                    estimate: Isometry3::identity(),
+                    estimate_agreeing: estimate,
+                    estimate_motion_agreeing: motion,
+                    candidates: [Some(a), Some(b)],
+                    replaced_by: None,
+                }
+            };
+        let prev = FallbackStart::PreviousDepthPose;
+        let extr = FallbackStart::Extrapolated;
+        // The better-agreeing candidate wins, if it beats the estimate by more than the margin.
+        let c = check(
+            0.3,
+            None,
+            candidate(prev, 0.4, None),
+            candidate(extr, 0.5, None),
+        );
+        assert_eq!(c.replacement(0.05, 0.3), Some(1));
+        assert_eq!(c.replacement(0.25, 0.3), None);
+        // A candidate whose motion the surroundings contradict is not taken; the other one still can be.
+        let c = check(
+            0.3,
+            Some(0.9),
+            candidate(prev, 0.5, Some(0.95)),
+            candidate(extr, 0.7, Some(0.1)),
+        );
+        assert_eq!(c.replacement(0.05, 0.3), Some(0));
+        // Within the motion margin, or with the motion check off, it is eligible again.
+        assert_eq!(c.replacement(0.05, 0.85), Some(1));
+        assert_eq!(c.replacement(0.05, -1.0), Some(1));
+        // An unknown motion agreement on either side does not refuse a candidate.
+        let c = check(
+            0.3,
+            None,
+            candidate(prev, 0.5, Some(0.0)),
+            candidate(extr, 0.2, None),
+        );
+        assert_eq!(c.replacement(0.05, 0.3), Some(0));
+        // Every candidate refused: the estimate is kept however poorly it agrees.
+        let c = check(
+            0.0,
+            Some(1.0),
+            candidate(prev, 0.9, Some(0.2)),
+            candidate(extr, 0.8, Some(0.3)),
+        );
+        assert_eq!(c.replacement(0.05, 0.3), None);
+        // A missing candidate is skipped.
+        let mut c = check(
+            0.3,
+            None,
+            candidate(prev, 0.9, None),
+            candidate(extr, 0.1, None),
+        );
+        c.candidates[0] = None;
+        assert_eq!(c.replacement(0.05, 0.3), None);
     }
 }

@@ -10,23 +10,22 @@ use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Vector6};
 
 impl ObjectTrack {
-    /// Fraction of the model's visible points that agree with `self.depth_now` at `pose`, and the term's counts.
-    pub(super) fn depth_fit_at(
+    /// The depth term's counts for the model's visible points at `pose` against `self.depth_now`.
+    pub(super) fn depth_stats_at(
         &self,
         pose: &Isometry3<f64>,
         roi_camera: &PinholeCamera,
         config: &TrackerConfig,
-    ) -> (f64, DepthTermStats) {
+    ) -> DepthTermStats {
         let mut scratch = NormalEquations::default();
-        let s = config.depth_term.accumulate(
+        config.depth_term.accumulate(
             &self.view,
             pose,
             &self.center_obj,
             roi_camera,
             &self.depth_now,
             &mut scratch,
-        );
-        (s.inliers as f64 / s.points.max(1) as f64, s)
+        )
     }
 
     /// At a fresh depth frame, keeps the previous frame's surfaces around the object that moved since (the carried
@@ -71,13 +70,13 @@ impl ObjectTrack {
     }
 
     /// Depth-only refinement from `start` against `self.depth_now` (what `depth30` does at a depth frame): the
-    /// refined pose with its agreeing fraction and counts.
+    /// refined pose and the depth term's counts there.
     pub(super) fn refine_on_depth(
         &self,
         start: Isometry3<f64>,
         roi_camera: &PinholeCamera,
         config: &TrackerConfig,
-    ) -> (f64, Isometry3<f64>, DepthTermStats) {
+    ) -> (Isometry3<f64>, DepthTermStats) {
         let bounds = StepBounds {
             max_rotation: config.max_step_rotation_deg.to_radians(),
             max_translation: config.max_step_translation_diameters * self.diameter,
@@ -103,8 +102,8 @@ impl ObjectTrack {
             offset += step;
             pose = apply_step(&pose, &self.center_obj, &step);
         }
-        let (fit, stats) = self.depth_fit_at(&pose, roi_camera, config);
-        (fit, pose, stats)
+        let stats = self.depth_stats_at(&pose, roi_camera, config);
+        (pose, stats)
     }
 
     /// Checks the hypothesis `self.predicted` against the fresh depth frame of `inputs` (re-detection): registers
@@ -134,7 +133,7 @@ impl ObjectTrack {
         self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
         self.carried
             .render(&start, &roi_camera, &mut self.depth_now);
-        let (_, pose, stats) = self.refine_on_depth(start, &roi_camera, config);
+        let (pose, stats) = self.refine_on_depth(start, &roi_camera, config);
         Some((seen_agreement(&stats), pose))
     }
 
@@ -161,10 +160,12 @@ impl ObjectTrack {
 /// view: a place hidden behind an occluder must not win on the few points left.
 const MIN_SEEN_FRACTION: f64 = 0.3;
 
-/// The fraction of a place's model points the depth confirms, among those not hidden by a nearer measurement (at
-/// least [`MIN_SEEN_FRACTION`] of all). A hand or another object in front of part of the object is neither for
-/// nor against the place: counting its points as disagreeing scored a correctly placed, half-hidden object below
-/// the hand holding it, which re-detection then took for the object.
+/// The fraction of a pose's model points the depth confirms, among those not hidden by a nearer measurement (at
+/// least [`MIN_SEEN_FRACTION`] of all); re-detection ranks places by it and the safety net compares the estimate
+/// with its candidates by it. A hand or another object in front of part of the object is neither for nor against
+/// the pose: counting its points as disagreeing scored a correctly placed, half-hidden object below the hand
+/// holding it, which re-detection then took for the object (and the safety net kept a drifting estimate over a
+/// correct candidate).
 pub(super) fn seen_agreement(stats: &DepthTermStats) -> f64 {
     let all = stats.points as f64;
     let seen = (stats.points.saturating_sub(stats.occluded) as f64).max(MIN_SEEN_FRACTION * all);

@@ -1,10 +1,9 @@
 //! The per-tick refinement of one object: events, carried depth and intensity in a few Gauss-Newton steps,
 //! with the depth-only safety net at fresh depth frames.
 
+use super::depth_check::seen_agreement;
 use super::{ObjectTrack, TickInputs, add_prior};
-use crate::refine::{
-    DepthTermStats, EventTermKind, NormalEquations, StepBounds, apply_step, solve_step,
-};
+use crate::refine::{EventTermKind, NormalEquations, StepBounds, apply_step, solve_step};
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::estimate::TrackingState;
 use crate::track::fallback_check::{DepthFallbackCheck, FallbackCandidate, FallbackStart};
@@ -241,7 +240,8 @@ impl ObjectTrack {
         }
         // Safety net at a fresh depth frame: the depth-only refinement from the previous depth frame's pose
         // (what `depth30` would report). If events led the estimate astray, the depth image says so: keep
-        // whichever hypothesis more model points agree with.
+        // whichever hypothesis more of the model points in view agree with, unless the surroundings contradict its
+        // motion ([`DepthFallbackCheck::replacement`]).
         if fresh
             && use_events
             && config.depth_fallback_margin >= 0.0
@@ -257,48 +257,42 @@ impl ObjectTrack {
                     (FallbackStart::Extrapolated, start)
                 }),
             ];
-            let (main_fit, main_stats) = self.depth_fit_at(&pose, &roi_camera, config);
-            let main_motion = self.motion_agreement_at(&pose, inputs, config);
+            let main_stats = self.depth_stats_at(&pose, &roi_camera, config);
             let mut check = DepthFallbackCheck {
                 object: usize::from(self.label) - 1,
                 t_us: inputs.t_us,
                 estimate: pose,
-                estimate_agreeing: main_fit,
-                estimate_motion_agreeing: main_motion,
+                estimate_agreeing: seen_agreement(&main_stats),
+                estimate_motion_agreeing: self.motion_agreement_at(&pose, inputs, config),
                 candidates: [None; 2],
                 replaced_by: None,
             };
-            let mut best: Option<(usize, f64, Isometry3<f64>, DepthTermStats)> = None;
+            let mut candidate_stats = [None; 2];
             for (k, start) in starts.into_iter().enumerate() {
                 let Some((kind, from)) = start else { continue };
-                let (fit, refined, stats) = self.refine_on_depth(from, &roi_camera, config);
-                let motion = self.motion_agreement_at(&refined, inputs, config);
+                let (refined, stats) = self.refine_on_depth(from, &roi_camera, config);
                 check.candidates[k] = Some(FallbackCandidate {
                     start: kind,
                     pose: refined,
-                    agreeing: fit,
-                    motion_agreeing: motion,
+                    agreeing: seen_agreement(&stats),
+                    motion_agreeing: self.motion_agreement_at(&refined, inputs, config),
                 });
-                // A candidate whose motion the surroundings contradict (it slid onto what holds the object) is
-                // not taken, however much depth its model points find there.
-                let motion_ok = match (main_motion, motion) {
-                    (Some(m), Some(c)) => c >= m - config.depth_fallback_motion_margin,
-                    _ => true,
-                };
-                if motion_ok && best.is_none_or(|(_, b, _, _)| fit > b) {
-                    best = Some((k, fit, refined, stats));
-                }
+                candidate_stats[k] = Some(stats);
             }
-            match best {
-                Some((k, fallback_fit, fallback, fallback_stats))
-                    if fallback_fit > main_fit + config.depth_fallback_margin =>
-                {
-                    pose = fallback;
-                    depth_stats = Some(fallback_stats);
+            check.replaced_by = check.replacement(
+                config.depth_fallback_margin,
+                config.depth_fallback_motion_margin,
+            );
+            let replacement = check
+                .replaced_by
+                .and_then(|k| Some((check.candidates[k]?, candidate_stats[k]?)));
+            match replacement {
+                Some((candidate, stats)) => {
+                    pose = candidate.pose;
+                    depth_stats = Some(stats);
                     self.fallbacks += 1;
-                    check.replaced_by = Some(k);
                 }
-                _ => depth_stats = Some(main_stats),
+                None => depth_stats = Some(main_stats),
             }
             self.fallback_check = Some(check);
         }
