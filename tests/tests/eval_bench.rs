@@ -101,12 +101,20 @@ fn bench_methods_on_a_short_recording() {
         ),
         (1, 0, 0)
     );
+    // ... and is named as a failure the state kept quiet about.
+    assert_eq!(noisy.silent_failures, ["can-shake-moderate"]);
+    assert!(noisy.false_alarms.is_empty());
     let md = results_markdown("test", &[stat, exact], AucLimit::Metres);
     assert!(
         md.contains("| can |") && md.contains("| **MEAN** |") && md.contains("update rate (Hz)")
     );
     assert!(
         md.contains("## Quality and `lost` against the error"),
+        "{md}"
+    );
+    // Exact poses: nothing to name under the quality table.
+    assert!(
+        md.contains("- gt-noise:0:0: failed without `lost`: none; `lost` without failure: none."),
         "{md}"
     );
 

@@ -52,6 +52,11 @@ pub struct QualityReport {
     pub failed_with_lost: usize,
     /// Sequences that did not fail on which `lost` was raised at least once.
     pub lost_without_failure: usize,
+    /// Names of the failed sequences on which `lost` was never raised (the failures the state kept quiet about),
+    /// in input order.
+    pub silent_failures: Vec<String>,
+    /// Names of the sequences that did not fail but raised `lost` (false alarms), in input order.
+    pub false_alarms: Vec<String>,
     /// Ticks whose state differs from the tick before (in the same sequence).
     pub state_changes: usize,
 }
@@ -111,8 +116,19 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     Some(v[v.len() / 2])
 }
 
-/// The report over `sequences`, each its ticks in time order and its object's diameter (metres).
-pub fn quality_report<'a>(sequences: &[(Vec<QualityTick<'a>>, f64)]) -> QualityReport {
+/// The ticks of one sequence (one object of it) for the quality report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SequenceTicks<'a> {
+    /// The sequence's name in the report (`sequence` or `sequence/object`).
+    pub name: String,
+    /// Its ticks in time order.
+    pub ticks: Vec<QualityTick<'a>>,
+    /// The object's diameter, metres.
+    pub diameter_m: f64,
+}
+
+/// The report over `sequences`.
+pub fn quality_report(sequences: &[SequenceTicks<'_>]) -> QualityReport {
     let mut report = QualityReport {
         ticks: 0,
         spearman: None,
@@ -121,18 +137,29 @@ pub fn quality_report<'a>(sequences: &[(Vec<QualityTick<'a>>, f64)]) -> QualityR
         failed: 0,
         failed_with_lost: 0,
         lost_without_failure: 0,
+        silent_failures: Vec::new(),
+        false_alarms: Vec::new(),
         state_changes: 0,
     };
     let (mut qualities, mut negated) = (Vec::new(), Vec::new());
     let mut banded: Vec<Vec<f64>> = vec![Vec::new(); QUALITY_BAND_EDGES.len()];
-    for (ticks, diameter) in sequences {
+    for SequenceTicks {
+        name,
+        ticks,
+        diameter_m,
+    } in sequences
+    {
         let errors: Vec<f64> = ticks.iter().map(|t| t.error_m).collect();
         let lost = ticks.iter().any(|t| t.state == "lost");
-        if truly_failed(&errors, *diameter) {
+        if truly_failed(&errors, *diameter_m) {
             report.failed += 1;
             report.failed_with_lost += usize::from(lost);
-        } else {
-            report.lost_without_failure += usize::from(lost);
+            if !lost {
+                report.silent_failures.push(name.clone());
+            }
+        } else if lost {
+            report.lost_without_failure += 1;
+            report.false_alarms.push(name.clone());
         }
         report.state_changes += ticks
             .windows(2)
@@ -186,12 +213,28 @@ pub fn sequence_ticks(s: &SequenceResult) -> Vec<QualityTick<'_>> {
         .collect()
 }
 
-/// The report of one method's results (every sequence, 120 Hz ticks).
+/// The report of one method's results (every sequence, 120 Hz ticks). A sequence with several objects is named
+/// `sequence/object`.
 pub fn method_quality_report(m: &MethodResults) -> QualityReport {
     let sequences: Vec<_> = m
         .sequences
         .iter()
-        .map(|s| (sequence_ticks(s), s.scores.diameter))
+        .map(|s| {
+            let objects = m
+                .sequences
+                .iter()
+                .filter(|o| o.sequence.name == s.sequence.name)
+                .count();
+            SequenceTicks {
+                name: if objects > 1 {
+                    format!("{}/{}", s.sequence.name, s.scores.object)
+                } else {
+                    s.sequence.name.clone()
+                },
+                ticks: sequence_ticks(s),
+                diameter_m: s.scores.diameter,
+            }
+        })
         .collect();
     quality_report(&sequences)
 }
@@ -244,12 +287,23 @@ mod tests {
         let quiet: Vec<_> = (0..8)
             .map(|i| tick(0.3, "degraded", if i < 6 { 0.003 } else { f64::INFINITY }))
             .collect();
-        let r = quality_report(&[(fine, d), (failed, d), (quiet, d)]);
+        let named = |name: &str, ticks| SequenceTicks {
+            name: name.into(),
+            ticks,
+            diameter_m: d,
+        };
+        let r = quality_report(&[
+            named("fine", fine),
+            named("failed", failed),
+            named("quiet", quiet),
+        ]);
         assert_eq!(r.sequences, 3);
         assert_eq!(
             (r.failed, r.failed_with_lost, r.lost_without_failure),
             (2, 1, 1)
         );
+        assert_eq!(r.silent_failures, ["quiet"]);
+        assert_eq!(r.false_alarms, ["fine"]);
         assert_eq!(r.state_changes, 2 + 1);
         assert_eq!(r.ticks, 22);
         let counts: Vec<usize> = r.bands.iter().map(|b| b.ticks).collect();

@@ -111,6 +111,23 @@ fn quality_table(out: &mut String, results: &[MethodResults]) {
             r.sequences, r.failed, r.failed_with_lost, r.lost_without_failure, r.state_changes
         );
     }
+    out.push('\n');
+    for (name, r) in &reports {
+        let _ = writeln!(
+            out,
+            "- {name}: failed without `lost`: {}; `lost` without failure: {}.",
+            names_or_none(&r.silent_failures),
+            names_or_none(&r.false_alarms)
+        );
+    }
+}
+
+fn names_or_none(names: &[String]) -> String {
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(", ")
+    }
 }
 
 fn cells(s: Option<&Summary>) -> String {
