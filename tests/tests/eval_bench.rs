@@ -6,8 +6,8 @@ use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use tracker::eval::bench::{
-    MethodResults, SuiteSequence, method_from_spec, open_sequence, results_json, results_markdown,
-    run_sequence,
+    MethodResults, SuiteSequence, expand_seeds, method_from_spec, open_sequence, results_json,
+    results_markdown, run_sequence,
 };
 use tracker::eval::quality_report::method_quality_report;
 use tracker::eval::{
@@ -104,7 +104,7 @@ fn bench_methods_on_a_short_recording() {
     // ... and is named as a failure the state kept quiet about.
     assert_eq!(noisy.silent_failures, ["can-shake-moderate"]);
     assert!(noisy.false_alarms.is_empty());
-    let md = results_markdown("test", &[stat, exact], AucLimit::Metres);
+    let md = results_markdown("test", &[stat, exact.clone()], AucLimit::Metres);
     assert!(
         md.contains("| can |") && md.contains("| **MEAN** |") && md.contains("update rate (Hz)")
     );
@@ -116,6 +116,53 @@ fn bench_methods_on_a_short_recording() {
     assert!(
         md.contains("- gt-noise:0:0: failed without `lost`: none; `lost` without failure: none."),
         "{md}"
+    );
+
+    // Seeds of one first-pose error form a group: different first poses, one row of spread in the report.
+    let seeded: Vec<MethodResults> = expand_seeds(&["depth30@4:3".to_string()], 2)
+        .iter()
+        .map(|spec| {
+            let mut r = run(spec, &seq);
+            r.name = method_from_spec(spec).unwrap().name().to_string();
+            r
+        })
+        .collect();
+    assert_eq!(
+        seeded.iter().map(|r| r.name.as_str()).collect::<Vec<_>>(),
+        ["depth30@4,3", "depth30@4,3,s2"]
+    );
+    let first = |r: &MethodResults| r.sequences[0].records[0].pose;
+    assert!(
+        (first(&seeded[0]).translation.vector - first(&seeded[1]).translation.vector).norm() > 1e-3,
+        "seeds 1 and 2 start from the same pose"
+    );
+    let all = [seeded.clone(), vec![exact.clone()]].concat();
+    let doc = results_json("test", &all, AucLimit::Diameter);
+    let spread = doc["seed_spread"].as_array().unwrap();
+    assert_eq!(spread.len(), 1, "{spread:?}");
+    assert_eq!(spread[0]["group"], "depth30@4,3");
+    let runs = spread[0]["runs"].as_array().unwrap();
+    assert_eq!(
+        runs.iter()
+            .map(|r| r["seed"].as_u64().unwrap())
+            .collect::<Vec<_>>(),
+        [1, 2]
+    );
+    for (r, m) in runs.iter().zip(&seeded) {
+        let mean = m.mean(false, AucLimit::Diameter).add_s;
+        assert!((r["add_s"].as_f64().unwrap() - mean).abs() < 1e-9);
+    }
+    let md = results_markdown("test", &all, AucLimit::Diameter);
+    assert!(md.contains("## Spread over first-pose seeds"), "{md}");
+    assert!(md.contains("| depth30@4,3 | 2 |"), "{md}");
+    assert!(
+        md.contains("- depth30@4,3: slow / moderate sequences with `lost`:"),
+        "{md}"
+    );
+    // Without seed groups there is no such section.
+    assert!(
+        !results_markdown("test", std::slice::from_ref(&exact), AucLimit::Diameter)
+            .contains("first-pose seeds")
     );
 
     // The pose CSV round trip scores the same as the in-memory poses.

@@ -138,7 +138,8 @@ impl Method for GtNoiseMethod {
     }
 }
 
-/// The tracker method `spec` names (`NAME` or `NAME@DEG:CM`) on `base` parameters; `None` when it names none.
+/// The tracker method `spec` names (`NAME`, `NAME@DEG:CM` or `NAME@DEG:CM:SEED`; seed 1 when not given) on `base`
+/// parameters; `None` when it names none.
 fn tracker_method_from_spec(
     spec: &str,
     base: &crate::track::TrackerConfig,
@@ -148,11 +149,40 @@ fn tracker_method_from_spec(
     }
     let (name, noise) = spec.split_once('@')?;
     let method = crate::track::TrackingMethod::from_name(name)?;
+    let parsed = match noise.split(':').collect::<Vec<_>>().as_slice() {
+        [deg, cm] => crate::track::InitNoise::parse(&format!("{deg},{cm}"), 1),
+        [deg, cm, seed] => seed
+            .trim()
+            .parse::<u64>()
+            .map_err(|_| format!("seed `{seed}` is not a whole number >= 0"))
+            .and_then(|seed| crate::track::InitNoise::parse(&format!("{deg},{cm}"), seed)),
+        _ => Err(format!(
+            "first-pose error `{noise}`: expected DEG:CM or DEG:CM:SEED (e.g. 5:5 or 5:5:2)"
+        )),
+    };
     Some(
-        crate::track::InitNoise::parse(&noise.replace(':', ","), 1)
+        parsed
             .map(|noise| crate::track::TrackerMethod::new(method, base).with_init_noise(noise))
             .map_err(|e| format!("method `{spec}`: {e}")),
     )
+}
+
+/// `specs` with every perturbed tracker method given without a seed (`NAME@DEG:CM`) repeated at seeds 1 to
+/// `seeds` (`NAME@DEG:CM:SEED`), in place; other specs, and everything when `seeds` is 1 or less, unchanged.
+pub fn expand_seeds(specs: &[String], seeds: u64) -> Vec<String> {
+    let mut out = Vec::new();
+    for spec in specs {
+        let spec = spec.trim();
+        let unseeded = spec.split_once('@').is_some_and(|(name, noise)| {
+            crate::track::TrackingMethod::from_name(name).is_some() && noise.split(':').count() == 2
+        });
+        if unseeded && seeds > 1 {
+            out.extend((1..=seeds).map(|k| format!("{spec}:{k}")));
+        } else {
+            out.push(spec.to_string());
+        }
+    }
+    out
 }
 
 fn record(t_us: i64, object: &str, pose: Isometry3<f64>, quality: f64) -> PoseRecord {
@@ -166,7 +196,7 @@ fn record(t_us: i64, object: &str, pose: Isometry3<f64>, quality: f64) -> PoseRe
 }
 
 /// Builds a method from its spec: a tracker method (`eventtrack6d`, `depth30`, `events-only`, optionally
-/// `NAME@DEG:CM` with a perturbed first pose), `static`, `gt-noise` (5 mm, 2 deg) or `gt-noise:MM:DEG`. Tracker
+/// `NAME@DEG:CM` or `NAME@DEG:CM:SEED` with a perturbed first pose), `static`, `gt-noise` (5 mm, 2 deg) or `gt-noise:MM:DEG`. Tracker
 /// methods use the default parameters.
 pub fn method_from_spec(spec: &str) -> Result<Box<dyn Method>, String> {
     method_from_spec_with(spec, &crate::track::TrackerConfig::default())
@@ -211,7 +241,7 @@ pub fn method_from_spec_with(
     }
     Err(format!(
         "unknown method `{spec}`: available are eventtrack6d, depth30, events-only (each optionally \
-         with a first-pose error NAME@DEG:CM), static, gt-noise, gt-noise:MM:DEG"
+         with a first-pose error NAME@DEG:CM or NAME@DEG:CM:SEED), static, gt-noise, gt-noise:MM:DEG"
     ))
 }
 
@@ -397,6 +427,62 @@ mod tests {
             .err()
             .unwrap();
         assert!(e.contains("depth30@x:1"), "{e}");
+    }
+
+    #[test]
+    fn perturbed_specs_take_an_optional_seed() {
+        let base = crate::track::TrackerConfig::default();
+        let m = tracker_method_from_spec("eventtrack6d@1:0.2", &base)
+            .unwrap()
+            .unwrap();
+        assert_eq!(m.name(), "eventtrack6d@1,0.2");
+        let m = tracker_method_from_spec("eventtrack6d@1:0.2:3", &base)
+            .unwrap()
+            .unwrap();
+        assert_eq!(m.name(), "eventtrack6d@1,0.2,s3");
+        // Seed 1 given explicitly is the same method as none given.
+        let m = tracker_method_from_spec("depth30@5:5:1", &base)
+            .unwrap()
+            .unwrap();
+        assert_eq!(m.name(), "depth30@5,5");
+        for bad in [
+            "eventtrack6d@1:0.2:x",
+            "eventtrack6d@1:0.2:-1",
+            "eventtrack6d@1:0.2:3:4",
+        ] {
+            let e = tracker_method_from_spec(bad, &base).unwrap().err().unwrap();
+            assert!(e.contains(bad), "{e}");
+        }
+    }
+
+    #[test]
+    fn seeds_expand_only_unseeded_perturbed_tracker_methods() {
+        let specs: Vec<String> = [
+            "eventtrack6d",
+            "depth30@3:3",
+            "events-only@3:3:7",
+            "gt-noise:1:1",
+        ]
+        .map(String::from)
+        .to_vec();
+        assert_eq!(
+            expand_seeds(&specs, 3),
+            [
+                "eventtrack6d",
+                "depth30@3:3:1",
+                "depth30@3:3:2",
+                "depth30@3:3:3",
+                "events-only@3:3:7",
+                "gt-noise:1:1"
+            ]
+        );
+        assert_eq!(expand_seeds(&specs, 1), specs);
+        // Every expanded spec builds, with the seed in its name.
+        let names: Vec<String> = expand_seeds(&specs[1..2], 2)
+            .iter()
+            .map(|s| method_from_spec(s).unwrap().name().to_string())
+            .collect();
+        assert_eq!(names, ["depth30@3,3", "depth30@3,3,s2"]);
     }
 
     #[test]

@@ -13,6 +13,7 @@ mod pose_error;
 pub mod quality_report;
 mod recall;
 pub mod report;
+pub mod seed_spread;
 mod sequence;
 mod symmetry;
 mod vsd;

@@ -3,6 +3,7 @@
 use super::bench::MethodResults;
 use super::quality_report::{QualityReport, method_quality_report};
 use super::recall::AucLimit;
+use super::seed_spread::{seed_spread_markdown, seed_spreads};
 use super::sequence::Summary;
 use serde_json::{Map, Value, json};
 use std::collections::BTreeMap;
@@ -64,7 +65,8 @@ pub fn results_json(suite: &str, results: &[MethodResults], limit: AucLimit) -> 
             }),
         );
     }
-    json!({"suite": suite, "auc_threshold": limit.describe(), "methods": methods})
+    let spreads = serde_json::to_value(seed_spreads(results, limit)).unwrap_or(Value::Null);
+    json!({"suite": suite, "auc_threshold": limit.describe(), "methods": methods, "seed_spread": spreads})
 }
 
 fn millimetres(m: Option<f64>) -> String {
@@ -200,6 +202,7 @@ pub fn results_markdown(suite: &str, results: &[MethodResults], limit: AucLimit)
     s.push_str("\n## 30 Hz (depth-exposure ticks only)\n\n");
     table(&mut s, results, true, false, limit);
     quality_table(&mut s, results);
+    s.push_str(&seed_spread_markdown(&seed_spreads(results, limit)));
     s.push_str("\n## Per sequence (120 Hz)\n\n| sequence | object | motion | speed |");
     for m in results {
         let _ = write!(s, " {0} ADD-S | {0} ADD | {0} AR |", m.name);

@@ -143,7 +143,8 @@ impl TrackerMethod {
         &self.config
     }
 
-    /// The same method with its first pose perturbed (report name gets a `@DEG,CM` suffix).
+    /// The same method with its first pose perturbed (report name gets a `@DEG,CM` suffix, and `,sSEED` for a
+    /// seed other than 1; [`crate::eval::seed_spread::seed_group`] reads it back).
     pub fn with_init_noise(mut self, noise: InitNoise) -> Self {
         self.name = format!(
             "{}@{},{}",
@@ -151,6 +152,9 @@ impl TrackerMethod {
             noise.degrees,
             noise.centimetres
         );
+        if noise.seed != 1 {
+            self.name = format!("{},s{}", self.name, noise.seed);
+        }
         self.init_noise = Some(noise);
         self
     }

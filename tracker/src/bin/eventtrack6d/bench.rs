@@ -7,7 +7,7 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tracker::eval::bench::{
-    MethodResults, SuiteSequence, method_from_spec_with, open_sequence, results_json,
+    MethodResults, SuiteSequence, expand_seeds, method_from_spec_with, open_sequence, results_json,
     results_markdown, run_sequence,
 };
 use tracker::eval::format_pose_csv;
@@ -24,7 +24,8 @@ pub struct BenchArgs {
     pub suite: String,
     /// Comma-separated methods: the trackers `eventtrack6d`, `depth30` (depth frames only, pose held in between),
     /// `events-only` (no depth after the first frame), each optionally `NAME@DEG:CM` (first pose turned by DEG
-    /// degrees and moved by CM centimetres, seed 1); the harness checks `static` (first pose held) and `gt-noise`
+    /// degrees about a random axis and moved by CM centimetres in a random direction, seed 1; see --seeds) or
+    /// `NAME@DEG:CM:SEED`; the harness checks `static` (first pose held) and `gt-noise`
     /// (ground truth with 5 mm, 2 deg noise) or `gt-noise:MM:DEG`.
     #[arg(long, value_delimiter = ',', required = true, value_name = "A,B,...")]
     pub methods: Vec<String>,
@@ -37,6 +38,10 @@ pub struct BenchArgs {
     /// Where named suites are generated.
     #[arg(long, value_name = "DIR", default_value = "target/suites")]
     pub suites_dir: PathBuf,
+    /// Run every perturbed tracker method given without a seed (`NAME@DEG:CM`) at seeds 1 to N
+    /// (`NAME@DEG:CM:SEED`), and report the spread of its scores over the seeds. 1 runs seed 1 only.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=100))]
+    pub seeds: u64,
     /// Tracker parameters for the tracker methods: a TOML file with the `[tracker]` table's keys at top level, as
     /// for `track --params` (each method's preset applies on top).
     #[arg(long, value_name = "TOML")]
@@ -139,7 +144,15 @@ fn load_suite(dir: &Path) -> Result<Vec<SuiteSequence>> {
 pub fn run(args: &BenchArgs) -> Result<()> {
     let base = crate::track::tracker_params(args.params.as_deref())?;
     let mut methods = Vec::new();
-    for spec in &args.methods {
+    let specs = expand_seeds(&args.methods, args.seeds);
+    if args.seeds > 1 && specs.len() == args.methods.len() {
+        bail!(
+            "--seeds {} repeats only perturbed tracker methods given without a seed (NAME@DEG:CM, e.g. \
+             eventtrack6d@1:0.2), and --methods has none",
+            args.seeds
+        );
+    }
+    for spec in &specs {
         methods.push(method_from_spec_with(spec, &base).map_err(anyhow::Error::msg)?);
     }
     let given = Path::new(&args.suite);
