@@ -108,6 +108,47 @@ fn bench_bad_inputs() {
         ],
         "translation noise (mm) `a`",
     );
+    // --seeds repeats perturbed tracker methods only, and says so when there is none; a seed must be a number.
+    fails_with(
+        &[
+            "bench",
+            "--suite",
+            "smoke",
+            "--methods",
+            "eventtrack6d,static",
+            "--seeds",
+            "3",
+            "--out",
+            out,
+        ],
+        "--methods has none",
+    );
+    fails_with(
+        &[
+            "bench",
+            "--suite",
+            "smoke",
+            "--methods",
+            "eventtrack6d",
+            "--seeds",
+            "0",
+            "--out",
+            out,
+        ],
+        "--seeds",
+    );
+    fails_with(
+        &[
+            "bench",
+            "--suite",
+            "smoke",
+            "--methods",
+            "eventtrack6d@1:1:x",
+            "--out",
+            out,
+        ],
+        "seed `x`",
+    );
     // Tracker parameters are checked before any suite is generated or read.
     let params = dir.path().join("params.toml");
     std::fs::write(&params, "[redetect]\nplaces_per_tik = 1\n").unwrap();
