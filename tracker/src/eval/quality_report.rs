@@ -219,24 +219,28 @@ pub fn method_quality_report(m: &MethodResults) -> QualityReport {
     let sequences: Vec<_> = m
         .sequences
         .iter()
-        .map(|s| {
-            let objects = m
-                .sequences
-                .iter()
-                .filter(|o| o.sequence.name == s.sequence.name)
-                .count();
-            SequenceTicks {
-                name: if objects > 1 {
-                    format!("{}/{}", s.sequence.name, s.scores.object)
-                } else {
-                    s.sequence.name.clone()
-                },
-                ticks: sequence_ticks(s),
-                diameter_m: s.scores.diameter,
-            }
+        .map(|s| SequenceTicks {
+            name: sequence_label(m, s),
+            ticks: sequence_ticks(s),
+            diameter_m: s.scores.diameter,
         })
         .collect();
     quality_report(&sequences)
+}
+
+/// How the reports name one result of `m`: the sequence, or `sequence/object` where the sequence has several
+/// objects.
+pub fn sequence_label(m: &MethodResults, s: &SequenceResult) -> String {
+    let objects = m
+        .sequences
+        .iter()
+        .filter(|o| o.sequence.name == s.sequence.name)
+        .count();
+    if objects > 1 {
+        format!("{}/{}", s.sequence.name, s.scores.object)
+    } else {
+        s.sequence.name.clone()
+    }
 }
 
 #[cfg(test)]

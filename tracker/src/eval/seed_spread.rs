@@ -4,7 +4,7 @@
 //! the spread over seeds can.
 
 use super::bench::MethodResults;
-use super::quality_report::method_quality_report;
+use super::quality_report::{method_quality_report, sequence_label};
 use super::recall::AucLimit;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -113,25 +113,14 @@ pub fn seed_spreads(results: &[MethodResults], limit: AucLimit) -> Vec<SeedSprea
 /// Slow and moderate sequences of `m` that raised `lost` at least once (`sequence/object` where a sequence has
 /// several objects).
 fn lost_slow_moderate(m: &MethodResults) -> Vec<String> {
-    let mut out = Vec::new();
-    for s in &m.sequences {
-        if !matches!(s.sequence.speed.as_str(), "slow" | "moderate")
-            || !s.records.iter().any(|r| r.state == "lost")
-        {
-            continue;
-        }
-        let objects = m
-            .sequences
-            .iter()
-            .filter(|o| o.sequence.name == s.sequence.name)
-            .count();
-        out.push(if objects > 1 {
-            format!("{}/{}", s.sequence.name, s.scores.object)
-        } else {
-            s.sequence.name.clone()
-        });
-    }
-    out
+    m.sequences
+        .iter()
+        .filter(|s| {
+            matches!(s.sequence.speed.as_str(), "slow" | "moderate")
+                && s.records.iter().any(|r| r.state == "lost")
+        })
+        .map(|s| sequence_label(m, s))
+        .collect()
 }
 
 /// The `results.md` section of the seed groups (empty without any).
