@@ -325,7 +325,7 @@ fn outline_search_finds_a_shift_beyond_the_refinement_range() {
     );
     let expected = 0.025 * cam.fx / 0.5;
     let [du, dv] = edges
-        .search_shift(&term, &view, &start, &cam, 40.0)
+        .search_shift(&term, &view, &start, &cam, 40.0, None)
         .expect("a shift");
     assert!(
         (du - expected).abs() < 3.0 && dv.abs() < 3.0,
@@ -333,7 +333,7 @@ fn outline_search_finds_a_shift_beyond_the_refinement_range() {
     );
     // A shorter range still moves towards the events, as far as it may.
     let [du, dv] = edges
-        .search_shift(&term, &view, &start, &cam, 8.0)
+        .search_shift(&term, &view, &start, &cam, 8.0, None)
         .expect("a partial shift");
     assert!(
         du > 0.0 && du.hypot(dv) <= 8.0 * 2f64.sqrt() + 0.5,

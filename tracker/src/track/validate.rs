@@ -282,6 +282,12 @@ impl TrackerConfig {
             non_neg,
             NON_NEGATIVE,
         )?;
+        check(
+            "event_term.search_aperture_tolerance",
+            e.search_aperture_tolerance,
+            unit,
+            UNIT,
+        )?;
         let q = &self.quality;
         check(
             "quality.degraded_below",

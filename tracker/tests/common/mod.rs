@@ -13,7 +13,12 @@ pub fn vga() -> PinholeCamera {
 
 /// An axis-aligned cube of edge `side` centred at the origin, 24 vertices (flat faces), outward normals.
 pub fn cube(side: f32) -> Mesh {
-    let h = side / 2.0;
+    cuboid(Vector3::new(side, side, side))
+}
+
+/// An axis-aligned box of edges `size` (x, y, z) centred at the origin, 24 vertices (flat faces), outward normals.
+pub fn cuboid(size: Vector3<f32>) -> Mesh {
+    let h = size / 2.0;
     let mut parts = MeshParts::default();
     // (normal, two in-face axes)
     let faces = [
@@ -27,7 +32,7 @@ pub fn cube(side: f32) -> Mesh {
     for (n, a, b) in faces {
         let base = parts.positions.len() as u32;
         for (s, t) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-            let p = (n + a * s + b * t) * h;
+            let p = (n + a * s + b * t).component_mul(&h);
             parts.positions.push(Point3::from(p));
             parts.normals.push(n);
             parts.uvs.push([(s + 1.0) / 2.0, (t + 1.0) / 2.0]);

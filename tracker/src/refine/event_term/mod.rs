@@ -95,6 +95,14 @@ pub struct EventTerm {
     /// A searched shift replaces the prediction only if its score beats the unshifted outline's by this
     /// fraction of the contour points.
     pub search_min_gain: f64,
+    /// Once the object's image motion is known (from the third depth frame on) and it slides more than it turns
+    /// (its centre moves 2 px per tick or more, and at least as far as turning moves its ends), of the
+    /// shifts that score within this fraction of twice the contour points of the best, the search takes the one
+    /// that moves the outline least across that motion (then least along it). An edge along the motion fires
+    /// no events, so the events hardly tell where the outline is across the motion: a long object moving
+    /// sideways scores alike at every shift along its length. 0 (default) takes the best score, the first of
+    /// equal ones in scan order; 0.05 measured dev +2.3 and holdout -1.9 ADD-S (BENCHMARKS.md, thirteenth round).
+    pub search_aperture_tolerance: f64,
     /// Contrast maximisation: first step of the pattern search over the centre's velocity, m/s.
     pub contrast_step_translation: f64,
     /// Contrast maximisation: first step of the pattern search over the angular velocity, rad/s.
@@ -121,6 +129,7 @@ impl Default for EventTerm {
             search_min_px: 8.0,
             search_speed_factor: 2.0,
             search_min_gain: 0.1,
+            search_aperture_tolerance: 0.0,
             contrast_step_translation: 0.25,
             contrast_step_rotation: 3.0,
             contrast_rounds: 5,
@@ -166,6 +175,8 @@ pub struct EventEdges {
     warped: Vec<f32>,
     /// Contour points' inside and outside probe bins of the shift search (ROI grid).
     probes: Vec<[[i32; 2]; 4]>,
+    /// Shift search scratch: the coarse grid's scores and shifts (ROI bins).
+    shift_scores: Vec<(i64, i64, i64)>,
     /// Contour points projected at the association pose, full-image pixels (NaN behind the camera).
     projected: Vec<[f64; 2]>,
     /// Per contour point, how far (full-image pixels, along its outward normal) the predicted motion swept it

@@ -9,7 +9,10 @@ use nalgebra::Isometry3;
 impl EventEdges {
     /// Searches image shifts of `view`'s outline at `pose` (within the term's search range) for the one whose
     /// contour points best separate events inside from no events outside, up to `range_px` (full-image pixels).
-    /// Returns the shift in full-image pixels if it beats the unshifted outline clearly, else `None`.
+    /// `motion_dir` is the unit image direction the object is predicted to move in, if known: near-best shifts
+    /// are then told apart by how far they move the outline across it
+    /// ([`EventTerm::search_aperture_tolerance`]). Returns the shift in full-image pixels if it beats the
+    /// unshifted outline clearly, else `None`.
     pub fn search_shift(
         &mut self,
         term: &EventTerm,
@@ -17,6 +20,7 @@ impl EventEdges {
         pose: &Isometry3<f64>,
         camera: &PinholeCamera,
         range_px: f64,
+        motion_dir: Option<[f64; 2]>,
     ) -> Option<[f64; 2]> {
         let roi = self.roi?;
         if range_px <= 0.0 || view.contour.is_empty() {
@@ -58,11 +62,15 @@ impl EventEdges {
         let base = score(0, 0);
         let mut best = (base, 0i64, 0i64);
         let coarse = 3i64;
+        let side = (2 * range / coarse + 2) as usize;
+        self.shift_scores.clear();
+        self.shift_scores.reserve(side * side);
         let mut dj = -range;
         while dj <= range {
             let mut di = -range;
             while di <= range {
                 let v = score(di, dj);
+                self.shift_scores.push((v, di, dj));
                 if v > best.0 {
                     best = (v, di, dj);
                 }
@@ -70,15 +78,36 @@ impl EventEdges {
             }
             dj += coarse;
         }
-        let (ci, cj) = (best.1, best.2);
-        for dj in (cj - coarse + 1).max(-range)..(cj + coarse).min(range + 1) {
-            for di in (ci - coarse + 1).max(-range)..(ci + coarse).min(range + 1) {
-                let v = score(di, dj);
-                if v > best.0 {
+        let slack = (term.search_aperture_tolerance * (2 * self.probes.len()) as f64) as i64;
+        if let Some([mx, my]) = motion_dir.filter(|_| slack > 0) {
+            let floor = best.0 - slack;
+            // Squared image distance across the motion, plus a hundredth of the squared distance along it.
+            let cost = |di: i64, dj: i64| {
+                let (x, y) = (di as f64 / sx, dj as f64 / sy);
+                let along = x * mx + y * my;
+                let across = x * my - y * mx;
+                across * across + 0.01 * along * along
+            };
+            if base >= floor && cost(0, 0) < cost(best.1, best.2) {
+                best = (base, 0, 0);
+            }
+            for &(v, di, dj) in &self.shift_scores {
+                if v >= floor && cost(di, dj) < cost(best.1, best.2) {
                     best = (v, di, dj);
                 }
             }
         }
+        let (ci, cj) = (best.1, best.2);
+        let mut fine = best;
+        for dj in (cj - coarse + 1).max(-range)..(cj + coarse).min(range + 1) {
+            for di in (ci - coarse + 1).max(-range)..(ci + coarse).min(range + 1) {
+                let v = score(di, dj);
+                if v > fine.0 {
+                    fine = (v, di, dj);
+                }
+            }
+        }
+        let best = fine;
         let gain = (best.0 - base) as f64 / (2 * self.probes.len()) as f64;
         (gain >= term.search_min_gain && (best.1, best.2) != (0, 0))
             .then(|| [best.1 as f64 / sx, best.2 as f64 / sy])

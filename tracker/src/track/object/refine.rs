@@ -140,6 +140,7 @@ impl ObjectTrack {
                 &predicted,
                 inputs.camera,
                 search_range,
+                self.image_motion_direction(&predicted, inputs),
             )
         {
             // Move the centre laterally by the image shift at its depth.
@@ -308,5 +309,31 @@ impl ObjectTrack {
         };
         let fit = depth_stats.filter(|_| depth_weight >= 1.0);
         self.finish(inputs, pose, fit, support, config);
+    }
+}
+
+impl ObjectTrack {
+    /// Unit image direction (full-image pixels) the centre at `predicted` moves in at the estimated velocity,
+    /// when it moves at least 2 px per tick and at least as far as turning moves the outline's ends;
+    /// `None` otherwise, and before the third depth frame (the motion is not measured yet).
+    fn image_motion_direction(
+        &self,
+        predicted: &Isometry3<f64>,
+        inputs: &TickInputs<'_>,
+    ) -> Option<[f64; 2]> {
+        if self.depth_frames_used < 2 {
+            return None;
+        }
+        let c = self.center_at(predicted);
+        let v = Vector3::new(self.velocity[0], self.velocity[1], self.velocity[2]);
+        let a = inputs.camera.project(&c)?;
+        let b = inputs.camera.project(&(c + v * inputs.dt_s))?;
+        let d = [b.x - a.x, b.y - a.y];
+        let n = d[0].hypot(d[1]);
+        // Turning moves the outline's ends in other directions than the centre: only a mostly sliding outline
+        // has one direction of motion.
+        let w = Vector3::new(self.velocity[3], self.velocity[4], self.velocity[5]).norm();
+        let turning = inputs.camera.fx * w * self.diameter * 0.5 / c.z.max(0.05) * inputs.dt_s;
+        (n >= 2.0 && n >= turning).then(|| [d[0] / n, d[1] / n])
     }
 }
