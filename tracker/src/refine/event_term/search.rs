@@ -62,15 +62,21 @@ impl EventEdges {
         let base = score(0, 0);
         let mut best = (base, 0i64, 0i64);
         let coarse = 3i64;
+        let slack = (term.search_aperture_tolerance * (2 * self.probes.len()) as f64) as i64;
+        let keep_scores = slack > 0 && motion_dir.is_some();
         let side = (2 * range / coarse + 2) as usize;
         self.shift_scores.clear();
-        self.shift_scores.reserve(side * side);
+        if keep_scores {
+            self.shift_scores.reserve(side * side);
+        }
         let mut dj = -range;
         while dj <= range {
             let mut di = -range;
             while di <= range {
                 let v = score(di, dj);
-                self.shift_scores.push((v, di, dj));
+                if keep_scores {
+                    self.shift_scores.push((v, di, dj));
+                }
                 if v > best.0 {
                     best = (v, di, dj);
                 }
@@ -78,8 +84,7 @@ impl EventEdges {
             }
             dj += coarse;
         }
-        let slack = (term.search_aperture_tolerance * (2 * self.probes.len()) as f64) as i64;
-        if let Some([mx, my]) = motion_dir.filter(|_| slack > 0) {
+        if let Some([mx, my]) = motion_dir.filter(|_| keep_scores) {
             let floor = best.0 - slack;
             // Squared image distance across the motion, plus a hundredth of the squared distance along it.
             let cost = |di: i64, dj: i64| {

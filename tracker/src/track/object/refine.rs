@@ -140,7 +140,9 @@ impl ObjectTrack {
                 &predicted,
                 inputs.camera,
                 search_range,
-                self.image_motion_direction(&predicted, inputs),
+                (event_term.search_aperture_tolerance > 0.0)
+                    .then(|| self.image_motion_direction(&predicted, inputs))
+                    .flatten(),
             )
         {
             // Move the centre laterally by the image shift at its depth.
