@@ -95,9 +95,9 @@ pub struct TrackerConfig {
     /// disables the check.
     pub depth_fallback_margin: f64,
     /// A depth-only candidate may replace the estimate only if the depth around the object confirms the motion
-    /// it implies since the previous depth frame nearly as well as the estimate's: its motion agreement (the
-    /// fraction of the previous frame's moved surfaces the new frame confirms, [`crate::recon::MovingNeighbourhood`])
-    /// falls short of the estimate's by at most this. Keeps the safety net from sliding the object onto the hand
+    /// it implies since the previous depth frame nearly as well as the best of the estimate and the candidates:
+    /// its motion agreement (the fraction of the previous frame's moved surfaces the new frame confirms,
+    /// [`crate::recon::MovingNeighbourhood`]) falls short of the best one's by at most this. Keeps the safety net from sliding the object onto the hand
     /// that holds it, which moves with it. Negative disables the check.
     pub depth_fallback_motion_margin: f64,
     /// Whether the depth-only fallback also starts from the previous depth frame's pose carried on at the velocity

@@ -66,15 +66,23 @@ impl DepthFallbackCheck {
     /// Index into `candidates` of the one that replaces the estimate, by the safety net's rule; `None` keeps it.
     ///
     /// A candidate is eligible unless the surroundings contradict its motion: its motion agreement is more than
-    /// `motion_margin` below the estimate's (either unknown, or a negative `motion_margin`: eligible). The
+    /// `motion_margin` below the best of the estimate's and the candidates' (its own unknown, or a negative
+    /// `motion_margin`: eligible). The
     /// eligible candidate with the highest `agreeing` replaces the estimate if it exceeds the estimate's by more
     /// than `margin`; on a tie the first wins.
     pub fn replacement(&self, margin: f64, motion_margin: f64) -> Option<usize> {
-        let eligible =
-            |c: &FallbackCandidate| match (self.estimate_motion_agreeing, c.motion_agreeing) {
-                (Some(m), Some(x)) if motion_margin >= 0.0 => x >= m - motion_margin,
-                _ => true,
-            };
+        // The best motion agreement of any hypothesis: the estimate's or a candidate's.
+        let best_motion = self
+            .candidates
+            .iter()
+            .flatten()
+            .filter_map(|c| c.motion_agreeing)
+            .chain(self.estimate_motion_agreeing)
+            .reduce(f64::max);
+        let eligible = |c: &FallbackCandidate| match (best_motion, c.motion_agreeing) {
+            (Some(m), Some(x)) if motion_margin >= 0.0 => x >= m - motion_margin,
+            _ => true,
+        };
         let mut best: Option<(usize, f64)> = None;
         for (k, c) in self.candidates.iter().enumerate() {
             let Some(c) = c.filter(eligible) else {
@@ -251,6 +259,15 @@ mod tests {
             candidate(extr, 0.2, None),
         );
         assert_eq!(c.replacement(0.05, 0.3), Some(0));
+        // A candidate whose motion the other candidate explains far better is not taken, even when the estimate
+        // explains its motion no better (the thin marker crossing the image: 0.36 / 0.16 against 0.29 / 0.97).
+        let c = check(
+            0.12,
+            Some(0.2),
+            candidate(prev, 0.36, Some(0.16)),
+            candidate(extr, 0.29, Some(0.97)),
+        );
+        assert_eq!(c.replacement(0.05, 0.3), Some(1));
         // Every candidate refused: the estimate is kept however poorly it agrees.
         let c = check(
             0.0,
