@@ -128,6 +128,33 @@ impl ModelView {
     }
 }
 
+impl ModelView {
+    /// Drops the silhouette samples that `measured` (a depth image in `camera`, metres, 0 = none) shows hidden at
+    /// `pose`: a measurement nearer than the sample by more than `gap` metres is an occluder in front of it (a
+    /// hand gripping the object), so no event can come from that part of the outline. Returns how many were
+    /// dropped.
+    pub fn hide_occluded_contour(
+        &mut self,
+        measured: &crate::recon::DepthImage,
+        camera: &PinholeCamera,
+        pose: &Isometry3<f64>,
+        gap: f64,
+    ) -> usize {
+        let before = self.contour.len();
+        self.contour.retain(|c| {
+            let p = pose * c.position;
+            if p.z <= 0.01 {
+                return true;
+            }
+            let u = (camera.fx * p.x / p.z + camera.cx).round() as i32;
+            let v = (camera.fy * p.y / p.z + camera.cy).round() as i32;
+            let zm = f64::from(measured.at(u, v));
+            !(zm > 0.0 && zm < p.z - gap)
+        });
+        before - self.contour.len()
+    }
+}
+
 /// Whether object pixel `(u, v)` lies on the silhouette: a 4-neighbour is empty, background or a farther object
 /// (a neighbour that is a nearer object is an occlusion boundary, not the object's own outline).
 fn is_silhouette(
@@ -178,4 +205,50 @@ fn outward_normal(
     }
     let n = (nx * nx + ny * ny).sqrt();
     (n > 1e-9).then(|| [nx / n, ny / n])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recon::DepthImage;
+
+    #[test]
+    fn outline_behind_a_nearer_surface_is_hidden_and_the_rest_kept() {
+        let camera = PinholeCamera::new(100.0, 100.0, 20.0, 20.0, 40, 40).unwrap();
+        let pose = Isometry3::translation(0.0, 0.0, 0.6);
+        // Four outline samples at 0.6 m, projecting to columns 5, 15, 25 and 35 of row 20.
+        let mut view = ModelView::default();
+        for x in [-0.09, -0.03, 0.03, 0.09] {
+            view.contour.push(ContourPoint {
+                position: Point3::new(x, 0.0, 0.0),
+                normal_2d: [1.0, 0.0],
+            });
+        }
+        // Columns 0-9: a hand 4 cm in front; 10-19: 1 cm in front (within the gap); 20-29: nothing measured;
+        // 30-39: the wall behind.
+        let mut measured = DepthImage::default();
+        measured.reset(40, 40);
+        for v in 0..40 {
+            for u in 0..40 {
+                measured.z[v * 40 + u] = match u {
+                    0..=9 => 0.56,
+                    10..=19 => 0.59,
+                    20..=29 => 0.0,
+                    _ => 1.5,
+                };
+            }
+        }
+        assert_eq!(
+            view.hide_occluded_contour(&measured, &camera, &pose, 0.025),
+            1
+        );
+        let left: Vec<f64> = view.contour.iter().map(|c| c.position.x).collect();
+        assert_eq!(left, vec![-0.03, 0.03, 0.09]);
+        // A smaller gap takes the surface 1 cm in front for an occluder too.
+        assert_eq!(
+            view.hide_occluded_contour(&measured, &camera, &pose, 0.005),
+            1
+        );
+        assert_eq!(view.contour.len(), 2);
+    }
 }
