@@ -108,6 +108,11 @@ pub struct TrackerConfig {
     /// Whether a degraded or lost object searches the event term's whole shift range every tick (to catch up
     /// with an object it fell behind) rather than the range its motion predicts.
     pub search_wide_when_degraded: bool,
+    /// Whether silhouette samples that the depth `D_t` shows behind a nearer surface (by more than the depth
+    /// term's `occlusion_gap`, at the predicted pose) are left out of the event and intensity terms: a hand
+    /// gripping the object hides that part of its outline, and the events there are the hand's. Off by
+    /// default: it fixed one hand-switch sequence but raised `lost` on more slow / moderate ones (BENCHMARKS.md).
+    pub hide_occluded_outline: bool,
     /// Fraction of the estimated velocity the prediction extrapolates with (1 = constant velocity).
     pub prediction_gain: f64,
     /// Whether the prediction also turns the object (off: it only moves it).
@@ -178,6 +183,7 @@ impl Default for TrackerConfig {
             depth_fallback_extrapolate: true,
             roi_widen_at_depth: false,
             search_wide_when_degraded: false,
+            hide_occluded_outline: false,
             prediction_gain: 0.5,
             predict_rotation: true,
             carried_depth_weight: 0.3,

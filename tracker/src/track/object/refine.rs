@@ -49,6 +49,22 @@ impl ObjectTrack {
             // Rendered below, at the pose the refinement starts from.
             depth_weight = config.carried_depth_weight;
         }
+        // Outline the depth shows behind a nearer surface (a hand gripping the object) fires no events: leave it
+        // out of the event and intensity terms rather than pull it onto the occluder's edges.
+        let mut depth_now_at_predicted = fresh;
+        if config.hide_occluded_outline && depth_weight > 0.0 {
+            if !fresh {
+                self.carried
+                    .render(&predicted, &roi_camera, &mut self.depth_now);
+                depth_now_at_predicted = true;
+            }
+            self.view.hide_occluded_contour(
+                &self.depth_now,
+                &roi_camera,
+                &predicted,
+                config.depth_term.occlusion_gap,
+            );
+        }
         let refine_now = match config.depth {
             DepthUse::DepthFramesOnly => fresh,
             _ => true,
@@ -157,7 +173,7 @@ impl ObjectTrack {
                 predicted.rotation,
             );
         }
-        if depth_weight > 0.0 && !fresh {
+        if depth_weight > 0.0 && !fresh && !(depth_now_at_predicted && pose == predicted) {
             self.carried.render(&pose, &roi_camera, &mut self.depth_now);
         }
         let mut depth_stats = None;
