@@ -131,27 +131,34 @@ impl ModelView {
 impl ModelView {
     /// Drops the silhouette samples that `measured` (a depth image in `camera`, metres, 0 = none) shows hidden at
     /// `pose`: a measurement nearer than the sample by more than `gap` metres is an occluder in front of it (a
-    /// hand gripping the object), so no event can come from that part of the outline. Returns how many were
-    /// dropped.
+    /// hand gripping the object), so no event can come from that part of the outline. When more than
+    /// `max_hidden_share` (0..=1) of the samples would go, none is dropped: what would be left is too little to
+    /// hold the pose, and the full outline is the better guess. Returns how many were dropped.
     pub fn hide_occluded_contour(
         &mut self,
         measured: &crate::recon::DepthImage,
         camera: &PinholeCamera,
         pose: &Isometry3<f64>,
         gap: f64,
+        max_hidden_share: f64,
     ) -> usize {
-        let before = self.contour.len();
-        self.contour.retain(|c| {
+        let hidden = |c: &ContourPoint| {
             let p = pose * c.position;
             if p.z <= 0.01 {
-                return true;
+                return false;
             }
             let u = (camera.fx * p.x / p.z + camera.cx).round() as i32;
             let v = (camera.fy * p.y / p.z + camera.cy).round() as i32;
             let zm = f64::from(measured.at(u, v));
-            !(zm > 0.0 && zm < p.z - gap)
-        });
-        before - self.contour.len()
+            zm > 0.0 && zm < p.z - gap
+        };
+        let before = self.contour.len();
+        let count = self.contour.iter().filter(|c| hidden(c)).count();
+        if count == 0 || count as f64 > max_hidden_share * before as f64 {
+            return 0;
+        }
+        self.contour.retain(|c| !hidden(c));
+        count
     }
 }
 
@@ -239,14 +246,20 @@ mod tests {
             }
         }
         assert_eq!(
-            view.hide_occluded_contour(&measured, &camera, &pose, 0.025),
+            view.hide_occluded_contour(&measured, &camera, &pose, 0.025, 1.0),
             1
         );
         let left: Vec<f64> = view.contour.iter().map(|c| c.position.x).collect();
         assert_eq!(left, vec![-0.03, 0.03, 0.09]);
-        // A smaller gap takes the surface 1 cm in front for an occluder too.
+        // A smaller gap takes the surface 1 cm in front for an occluder too: one of three samples, more than a
+        // cap of 30 % leaves the outline whole, and no cap drops it.
         assert_eq!(
-            view.hide_occluded_contour(&measured, &camera, &pose, 0.005),
+            view.hide_occluded_contour(&measured, &camera, &pose, 0.005, 0.3),
+            0
+        );
+        assert_eq!(view.contour.len(), 3);
+        assert_eq!(
+            view.hide_occluded_contour(&measured, &camera, &pose, 0.005, 1.0),
             1
         );
         assert_eq!(view.contour.len(), 2);

@@ -111,8 +111,13 @@ pub struct TrackerConfig {
     /// Whether silhouette samples that the depth `D_t` shows behind a nearer surface (by more than the depth
     /// term's `occlusion_gap`, at the predicted pose) are left out of the event and intensity terms: a hand
     /// gripping the object hides that part of its outline, and the events there are the hand's. Off by
-    /// default: it fixed one hand-switch sequence but raised `lost` on more slow / moderate ones (BENCHMARKS.md).
+    /// default: it lifts the hand-switch sequences but did not lower failures or slow / moderate `lost`
+    /// (BENCHMARKS.md, fifteenth round).
     pub hide_occluded_outline: bool,
+    /// With `hide_occluded_outline`, the largest share (0..=1) of the outline samples hidden on a tick; when
+    /// more would be hidden, the whole outline is kept (a thin object mostly under a hand). 0.5 measured better
+    /// than 1 on the hand-switch sequences (BENCHMARKS.md, fifteenth round).
+    pub hide_occluded_max_share: f64,
     /// Fraction of the estimated velocity the prediction extrapolates with (1 = constant velocity).
     pub prediction_gain: f64,
     /// Whether the prediction also turns the object (off: it only moves it).
@@ -184,6 +189,7 @@ impl Default for TrackerConfig {
             roi_widen_at_depth: false,
             search_wide_when_degraded: false,
             hide_occluded_outline: false,
+            hide_occluded_max_share: 0.5,
             prediction_gain: 0.5,
             predict_rotation: true,
             carried_depth_weight: 0.3,

@@ -74,6 +74,12 @@ impl TrackerConfig {
             "must be 0 to 2",
         )?;
         check(
+            "hide_occluded_max_share",
+            self.hide_occluded_max_share,
+            |v| (0.0..=1.0).contains(&v),
+            "must be 0 to 1",
+        )?;
+        check(
             "depth_fallback_margin",
             self.depth_fallback_margin,
             |_| true,
@@ -360,6 +366,11 @@ mod tests {
         let parse = |text: &str| toml::from_str::<TrackerConfig>(text).unwrap().validate();
         let e = parse("prior_translation_m = 0.0").unwrap_err();
         assert_eq!(e.key, "prior_translation_m");
+        let e = parse("hide_occluded_max_share = 1.5").unwrap_err();
+        assert!(
+            e.to_string().contains("`hide_occluded_max_share` = 1.5"),
+            "{e}"
+        );
         let e = parse("prediction_gain = nan").unwrap_err();
         assert!(e.to_string().contains("`prediction_gain` = NaN"), "{e}");
         let e = parse("[event_term]\nsigma_px = -1.0").unwrap_err();

@@ -63,6 +63,7 @@ impl ObjectTrack {
                 &roi_camera,
                 &predicted,
                 config.depth_term.occlusion_gap,
+                config.hide_occluded_max_share,
             );
         }
         let refine_now = match config.depth {
