@@ -60,7 +60,7 @@ pub struct DepthFallbackCheck {
 }
 
 /// Header of the fallback trace CSV.
-pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced,estimate_motion_agreeing,candidate_motion_agreeing";
+pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced,estimate_motion_agreeing,candidate_motion_agreeing,estimate_qx,estimate_qy,estimate_qz,estimate_qw,candidate_qx,candidate_qy,candidate_qz,candidate_qw";
 
 impl DepthFallbackCheck {
     /// Index into `candidates` of the one that replaces the estimate, by the safety net's rule; `None` keeps it.
@@ -98,12 +98,15 @@ impl DepthFallbackCheck {
 
     /// Appends one CSV row per candidate (columns of [`FALLBACK_TRACE_HEADER`]) to `out`; `name` is the object's
     /// name. Positions are the translations of the poses, metres; `rotation_to_estimate_deg` is the angle between
-    /// the candidate's and the estimate's orientation.
+    /// the candidate's and the estimate's orientation; the last eight columns are the two orientations as unit
+    /// quaternions (x, y, z, w), so each row holds both whole poses.
     pub fn write_csv_rows(&self, name: &str, out: &mut String) {
         let e = self.estimate.translation.vector;
+        let eq = self.estimate.rotation.coords;
         for (k, c) in self.candidates.iter().enumerate() {
             let Some(c) = c else { continue };
             let p = c.pose.translation.vector;
+            let cq = c.pose.rotation.coords;
             let angle = c
                 .pose
                 .rotation
@@ -112,7 +115,7 @@ impl DepthFallbackCheck {
             // Writing into a String cannot fail.
             let _ = writeln!(
                 out,
-                "{},{},{:.6},{:.6},{:.6},{:.4},{},{:.6},{:.6},{:.6},{:.4},{:.3},{},{},{}",
+                "{},{},{:.6},{:.6},{:.6},{:.4},{},{:.6},{:.6},{:.6},{:.4},{:.3},{},{},{},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7}",
                 self.t_us,
                 name,
                 e.x,
@@ -128,6 +131,14 @@ impl DepthFallbackCheck {
                 u8::from(self.replaced_by == Some(k)),
                 optional_fraction(self.estimate_motion_agreeing),
                 optional_fraction(c.motion_agreeing),
+                eq.x,
+                eq.y,
+                eq.z,
+                eq.w,
+                cq.x,
+                cq.y,
+                cq.z,
+                cq.w,
             );
         }
     }
@@ -181,7 +192,15 @@ mod tests {
         assert_eq!(cols[7], "0.120000");
         assert_eq!(cols[11], "10.000");
         assert_eq!(cols[12], "1");
-        assert_eq!(&cols[13..], &["0.9000", "0.8500"]);
+        assert_eq!(&cols[13..15], &["0.9000", "0.8500"]);
+        // Both orientations: the estimate's identity, the candidate's 10 degrees about z.
+        let half = 5f64.to_radians();
+        let q: Vec<f64> = cols[15..].iter().map(|c| c.parse().unwrap()).collect();
+        let want = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, half.sin(), half.cos()];
+        assert!(
+            q.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6),
+            "{q:?}"
+        );
 
         let kept = DepthFallbackCheck {
             replaced_by: None,
@@ -202,7 +221,7 @@ mod tests {
         let replaced: Vec<&str> = cols.iter().map(|c| c[12]).collect();
         assert_eq!(replaced, ["0", "0"]);
         // An unknown motion agreement is an empty field.
-        assert_eq!(&cols[1][13..], &["0.9000", ""]);
+        assert_eq!(&cols[1][13..15], &["0.9000", ""]);
         assert!(out.lines().nth(1).unwrap().contains(",extrapolated,"));
     }
 
