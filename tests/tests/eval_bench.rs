@@ -104,6 +104,9 @@ fn bench_methods_on_a_short_recording() {
     // ... and is named as a failure the state kept quiet about.
     assert_eq!(noisy.silent_failures, ["can-shake-moderate"]);
     assert!(noisy.false_alarms.is_empty());
+    // Its ticks off the object are counted, and none of them was announced.
+    assert!(noisy.off_ticks > 0, "{noisy:?}");
+    assert_eq!((noisy.lost_ticks, noisy.off_ticks_lost), (0, 0));
     let md = results_markdown("test", &[stat, exact.clone()], AucLimit::Metres);
     assert!(
         md.contains("| can |") && md.contains("| **MEAN** |") && md.contains("update rate (Hz)")

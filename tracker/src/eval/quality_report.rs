@@ -57,17 +57,30 @@ pub struct QualityReport {
     pub silent_failures: Vec<String>,
     /// Names of the sequences that did not fail but raised `lost` (false alarms), in input order.
     pub false_alarms: Vec<String>,
+    /// Of [`Self::false_alarms`], those whose `lost` ticks were mostly (more than half) off by more than
+    /// 0.1 x diameter: true losses the tracker recovered from before the end, not alarms on a good pose.
+    pub recovered_losses: Vec<String>,
     /// Ticks whose state differs from the tick before (in the same sequence).
     pub state_changes: usize,
+    /// Ticks in state `lost`, over every sequence.
+    pub lost_ticks: usize,
+    /// Of [`Self::lost_ticks`], those with an ADD-S error above 0.1 x diameter (or no pose): `lost` was right.
+    pub lost_ticks_off: usize,
+    /// Ticks with an ADD-S error above 0.1 x diameter (or no pose), over every sequence.
+    pub off_ticks: usize,
+    /// Of [`Self::off_ticks`], those in state `lost`: how much of the time spent off the object was announced.
+    pub off_ticks_lost: usize,
+}
+
+/// Whether an ADD-S error counts as off the object: above `0.1 x diameter_m`, or not a number (no pose).
+fn is_off(error_m: f64, diameter_m: f64) -> bool {
+    error_m.is_nan() || error_m > 0.1 * diameter_m
 }
 
 /// Whether a sequence truly failed: error above `0.1 x diameter_m` on more than half of its last quarter.
 pub fn truly_failed(errors_m: &[f64], diameter_m: f64) -> bool {
     let last = &errors_m[errors_m.len() * 3 / 4..];
-    let off = last
-        .iter()
-        .filter(|&&e| e.is_nan() || e > 0.1 * diameter_m)
-        .count();
+    let off = last.iter().filter(|&&e| is_off(e, diameter_m)).count();
     !last.is_empty() && 2 * off > last.len()
 }
 
@@ -139,7 +152,12 @@ pub fn quality_report(sequences: &[SequenceTicks<'_>]) -> QualityReport {
         lost_without_failure: 0,
         silent_failures: Vec::new(),
         false_alarms: Vec::new(),
+        recovered_losses: Vec::new(),
         state_changes: 0,
+        lost_ticks: 0,
+        lost_ticks_off: 0,
+        off_ticks: 0,
+        off_ticks_lost: 0,
     };
     let (mut qualities, mut negated) = (Vec::new(), Vec::new());
     let mut banded: Vec<Vec<f64>> = vec![Vec::new(); QUALITY_BAND_EDGES.len()];
@@ -151,6 +169,19 @@ pub fn quality_report(sequences: &[SequenceTicks<'_>]) -> QualityReport {
     {
         let errors: Vec<f64> = ticks.iter().map(|t| t.error_m).collect();
         let lost = ticks.iter().any(|t| t.state == "lost");
+        let lost_ticks = ticks.iter().filter(|t| t.state == "lost").count();
+        let lost_off = ticks
+            .iter()
+            .filter(|t| t.state == "lost" && is_off(t.error_m, *diameter_m))
+            .count();
+        let off: Vec<_> = ticks
+            .iter()
+            .filter(|t| is_off(t.error_m, *diameter_m))
+            .collect();
+        report.lost_ticks += lost_ticks;
+        report.lost_ticks_off += lost_off;
+        report.off_ticks += off.len();
+        report.off_ticks_lost += off.iter().filter(|t| t.state == "lost").count();
         if truly_failed(&errors, *diameter_m) {
             report.failed += 1;
             report.failed_with_lost += usize::from(lost);
@@ -160,6 +191,9 @@ pub fn quality_report(sequences: &[SequenceTicks<'_>]) -> QualityReport {
         } else if lost {
             report.lost_without_failure += 1;
             report.false_alarms.push(name.clone());
+            if 2 * lost_off > lost_ticks {
+                report.recovered_losses.push(name.clone());
+            }
         }
         report.state_changes += ticks
             .windows(2)
@@ -308,7 +342,13 @@ mod tests {
         );
         assert_eq!(r.silent_failures, ["quiet"]);
         assert_eq!(r.false_alarms, ["fine"]);
+        // Its one `lost` tick was on the object: an alarm on a good pose, not a recovered loss.
+        assert!(r.recovered_losses.is_empty());
         assert_eq!(r.state_changes, 2 + 1);
+        // `lost` ticks: one on the object ("fine"), two off ("failed"); off ticks: those two and the two
+        // missing poses of "quiet".
+        assert_eq!((r.lost_ticks, r.lost_ticks_off), (3, 2));
+        assert_eq!((r.off_ticks, r.off_ticks_lost), (4, 2));
         assert_eq!(r.ticks, 22);
         let counts: Vec<usize> = r.bands.iter().map(|b| b.ticks).collect();
         assert_eq!(counts, vec![8, 6, 6, 2]);
@@ -318,6 +358,40 @@ mod tests {
         assert_eq!((r.bands[3].from, r.bands[3].to), (0.0, 0.2));
         // Higher quality, smaller error here.
         assert!(r.spearman.unwrap() > 0.5);
+    }
+
+    #[test]
+    fn a_loss_the_tracker_recovered_from_is_told_apart_from_an_alarm_on_a_good_pose() {
+        let d = 0.1;
+        // Off by 5 cm for three ticks, `lost` on two of them and on one tick after it was back; fine at the end.
+        let errors = [0.002, 0.05, 0.05, 0.05, 0.003, 0.002, 0.002, 0.002];
+        let states = [
+            "tracking", "degraded", "lost", "lost", "lost", "tracking", "tracking", "tracking",
+        ];
+        let recovered: Vec<_> = errors
+            .iter()
+            .zip(states)
+            .map(|(&e, s)| tick(0.5, s, e))
+            .collect();
+        // The same `lost` ticks, but on the object throughout.
+        let alarm: Vec<_> = states.iter().map(|&s| tick(0.5, s, 0.002)).collect();
+        let r = quality_report(&[
+            SequenceTicks {
+                name: "recovered".into(),
+                ticks: recovered,
+                diameter_m: d,
+            },
+            SequenceTicks {
+                name: "alarm".into(),
+                ticks: alarm,
+                diameter_m: d,
+            },
+        ]);
+        assert_eq!(r.failed, 0);
+        assert_eq!(r.false_alarms, ["recovered", "alarm"]);
+        assert_eq!(r.recovered_losses, ["recovered"]);
+        assert_eq!((r.lost_ticks, r.lost_ticks_off), (6, 2));
+        assert_eq!((r.off_ticks, r.off_ticks_lost), (3, 2));
     }
 
     #[test]

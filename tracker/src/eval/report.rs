@@ -87,18 +87,20 @@ fn quality_table(out: &mut String, results: &[MethodResults]) {
         "\n## Quality and `lost` against the error (120 Hz)\n\nSpearman: rank correlation of the method's \
          quality with the negated ADD-S error over every tick (+1: higher quality, smaller error). Then the \
          median ADD-S error (mm) and ticks per quality band. Failed: ADD-S error above 0.1 x diameter on more \
-         than half of a sequence's last quarter.\n\n| method | Spearman |",
+         than half of a sequence's last quarter. Off: a tick whose ADD-S error is above 0.1 x diameter; `lost` \
+         ticks off: how many `lost` ticks were right; off ticks `lost`: how much of the time off the object was \
+         announced.\n\n| method | Spearman |",
     );
     for b in &first.bands {
         let _ = write!(out, " q {:.1}-{:.1}: mm (ticks) |", b.from, b.to);
     }
     out.push_str(
-        " sequences | failed | failed with `lost` | `lost`, not failed | state changes |\n| --- | ---: |",
+        " sequences | failed | failed with `lost` | `lost`, not failed | state changes | `lost` ticks off | off ticks `lost` |\n| --- | ---: |",
     );
     for _ in &first.bands {
         out.push_str(" ---: |");
     }
-    out.push_str(" ---: | ---: | ---: | ---: | ---: |\n");
+    out.push_str(" ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
     for (name, r) in &reports {
         let rho = r
             .spearman
@@ -109,18 +111,45 @@ fn quality_table(out: &mut String, results: &[MethodResults]) {
         }
         let _ = writeln!(
             out,
-            " {} | {} | {} | {} | {} |",
-            r.sequences, r.failed, r.failed_with_lost, r.lost_without_failure, r.state_changes
+            " {} | {} | {} | {} | {} | {} | {} |",
+            r.sequences,
+            r.failed,
+            r.failed_with_lost,
+            r.lost_without_failure,
+            r.state_changes,
+            share(r.lost_ticks_off, r.lost_ticks),
+            share(r.off_ticks_lost, r.off_ticks)
         );
     }
     out.push('\n');
     for (name, r) in &reports {
+        // A false alarm whose `lost` ticks were mostly off the object was a true loss it recovered from.
+        let recovered = if r.false_alarms.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (of them, off by more than 0.1 x diameter on most of their `lost` ticks, recovered later: {})",
+                names_or_none(&r.recovered_losses)
+            )
+        };
         let _ = writeln!(
             out,
-            "- {name}: failed without `lost`: {}; `lost` without failure: {}.",
+            "- {name}: failed without `lost`: {}; `lost` without failure: {}{recovered}.",
             names_or_none(&r.silent_failures),
-            names_or_none(&r.false_alarms)
+            names_or_none(&r.false_alarms),
         );
+    }
+}
+
+/// `part / whole` as "part / whole (percent)", or "0 / 0" without a whole.
+fn share(part: usize, whole: usize) -> String {
+    if whole == 0 {
+        "0 / 0".into()
+    } else {
+        format!(
+            "{part} / {whole} ({:.0} %)",
+            100.0 * part as f64 / whole as f64
+        )
     }
 }
 
