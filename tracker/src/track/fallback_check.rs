@@ -38,6 +38,10 @@ pub struct FallbackCandidate {
     /// [0, 1] ([`crate::recon::MovingNeighbourhood::motion_agreement`]); `None` when too few could be scored or
     /// the check is off.
     pub motion_agreeing: Option<f64>,
+    /// Fraction of the estimate's outline points that land, at `pose`, within two ROI bins of a kept recent event
+    /// ([`crate::refine::EventEdges::contour_support`]), in [0, 1]; `None` without events in the ROI. Recorded
+    /// for the trace; the rule does not use it.
+    pub event_support: Option<f64>,
 }
 
 /// One object's safety-net check at one fresh depth frame.
@@ -53,6 +57,8 @@ pub struct DepthFallbackCheck {
     pub estimate_agreeing: f64,
     /// The same motion agreement for `estimate` as [`FallbackCandidate::motion_agreeing`].
     pub estimate_motion_agreeing: Option<f64>,
+    /// The same event support for `estimate` as [`FallbackCandidate::event_support`].
+    pub estimate_event_support: Option<f64>,
     /// The candidates, in the order they were refined (`None`: that start is not configured).
     pub candidates: [Option<FallbackCandidate>; 2],
     /// Index into `candidates` of the one that replaced the estimate; `None` if the estimate was kept.
@@ -60,7 +66,7 @@ pub struct DepthFallbackCheck {
 }
 
 /// Header of the fallback trace CSV.
-pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced,estimate_motion_agreeing,candidate_motion_agreeing,estimate_qx,estimate_qy,estimate_qz,estimate_qw,candidate_qx,candidate_qy,candidate_qz,candidate_qw";
+pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced,estimate_motion_agreeing,candidate_motion_agreeing,estimate_qx,estimate_qy,estimate_qz,estimate_qw,candidate_qx,candidate_qy,candidate_qz,candidate_qw,estimate_event_support,candidate_event_support";
 
 impl DepthFallbackCheck {
     /// Index into `candidates` of the one that replaces the estimate, by the safety net's rule; `None` keeps it.
@@ -99,7 +105,7 @@ impl DepthFallbackCheck {
     /// Appends one CSV row per candidate (columns of [`FALLBACK_TRACE_HEADER`]) to `out`; `name` is the object's
     /// name. Positions are the translations of the poses, metres; `rotation_to_estimate_deg` is the angle between
     /// the candidate's and the estimate's orientation; the last eight columns are the two orientations as unit
-    /// quaternions (x, y, z, w), so each row holds both whole poses.
+    /// quaternions (x, y, z, w), so each row holds both whole poses, followed by the two event supports.
     pub fn write_csv_rows(&self, name: &str, out: &mut String) {
         let e = self.estimate.translation.vector;
         let eq = self.estimate.rotation.coords;
@@ -115,7 +121,7 @@ impl DepthFallbackCheck {
             // Writing into a String cannot fail.
             let _ = writeln!(
                 out,
-                "{},{},{:.6},{:.6},{:.6},{:.4},{},{:.6},{:.6},{:.6},{:.4},{:.3},{},{},{},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7}",
+                "{},{},{:.6},{:.6},{:.6},{:.4},{},{:.6},{:.6},{:.6},{:.4},{:.3},{},{},{},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{},{}",
                 self.t_us,
                 name,
                 e.x,
@@ -139,6 +145,8 @@ impl DepthFallbackCheck {
                 cq.y,
                 cq.z,
                 cq.w,
+                optional_fraction(self.estimate_event_support),
+                optional_fraction(c.event_support),
             );
         }
     }
@@ -170,12 +178,14 @@ mod tests {
             estimate,
             estimate_agreeing: 0.35,
             estimate_motion_agreeing: Some(0.9),
+            estimate_event_support: Some(0.75),
             candidates: [
                 Some(FallbackCandidate {
                     start: FallbackStart::PreviousDepthPose,
                     pose: turned,
                     agreeing: 0.52,
                     motion_agreeing: Some(0.85),
+                    event_support: Some(0.4),
                 }),
                 None,
             ],
@@ -195,12 +205,13 @@ mod tests {
         assert_eq!(&cols[13..15], &["0.9000", "0.8500"]);
         // Both orientations: the estimate's identity, the candidate's 10 degrees about z.
         let half = 5f64.to_radians();
-        let q: Vec<f64> = cols[15..].iter().map(|c| c.parse().unwrap()).collect();
+        let q: Vec<f64> = cols[15..23].iter().map(|c| c.parse().unwrap()).collect();
         let want = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, half.sin(), half.cos()];
         assert!(
             q.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6),
             "{q:?}"
         );
+        assert_eq!(&cols[23..], &["0.7500", "0.4000"]);
 
         let kept = DepthFallbackCheck {
             replaced_by: None,
@@ -211,6 +222,7 @@ mod tests {
                     pose: estimate,
                     agreeing: 0.33,
                     motion_agreeing: None,
+                    event_support: None,
                 }),
             ],
             ..check
@@ -223,6 +235,8 @@ mod tests {
         // An unknown motion agreement is an empty field.
         assert_eq!(&cols[1][13..15], &["0.9000", ""]);
         assert!(out.lines().nth(1).unwrap().contains(",extrapolated,"));
+        // An unknown event support is an empty field too.
+        assert_eq!(&cols[1][23..], &["0.7500", ""]);
     }
 
     fn candidate(start: FallbackStart, agreeing: f64, motion: Option<f64>) -> FallbackCandidate {
@@ -231,6 +245,7 @@ mod tests {
             pose: Isometry3::identity(),
             agreeing,
             motion_agreeing: motion,
+            event_support: None,
         }
     }
 
@@ -244,6 +259,7 @@ mod tests {
                     estimate: Isometry3::identity(),
                     estimate_agreeing: estimate,
                     estimate_motion_agreeing: motion,
+                    estimate_event_support: None,
                     candidates: [Some(a), Some(b)],
                     replaced_by: None,
                 }

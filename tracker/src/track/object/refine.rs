@@ -284,6 +284,11 @@ impl ObjectTrack {
                 estimate: pose,
                 estimate_agreeing: seen_agreement(&main_stats),
                 estimate_motion_agreeing: self.motion_agreement_at(&pose, inputs, config),
+                estimate_event_support: self.edges.contour_support(
+                    &self.view,
+                    &pose,
+                    inputs.camera,
+                ),
                 candidates: [None; 2],
                 replaced_by: None,
             };
@@ -296,6 +301,9 @@ impl ObjectTrack {
                     pose: refined,
                     agreeing: seen_agreement(&stats),
                     motion_agreeing: self.motion_agreement_at(&refined, inputs, config),
+                    event_support: self
+                        .edges
+                        .contour_support(&self.view, &refined, inputs.camera),
                 });
                 candidate_stats[k] = Some(stats);
             }
