@@ -100,6 +100,10 @@ pub struct TrackerConfig {
     /// [`crate::recon::MovingNeighbourhood`]) falls short of the best one's by at most this. Keeps the safety net from sliding the object onto the hand
     /// that holds it, which moves with it. Negative disables the check.
     pub depth_fallback_motion_margin: f64,
+    /// Weight of the events' verdict in the safety net: a candidate's score is its agreeing fraction plus this
+    /// times how much more of its contour the recent event edges support than the estimate's
+    /// ([`crate::track::DepthFallbackCheck::replacement`]). 0 leaves the choice to depth alone.
+    pub depth_fallback_event_weight: f64,
     /// Whether the depth-only fallback also starts from the previous depth frame's pose carried on at the velocity
     /// measured between depth frames (and keeps the better of its two results).
     pub depth_fallback_extrapolate: bool,
@@ -185,6 +189,7 @@ impl Default for TrackerConfig {
             prediction: true,
             depth_fallback_margin: 0.05,
             depth_fallback_motion_margin: 0.3,
+            depth_fallback_event_weight: 0.0,
             depth_fallback_extrapolate: true,
             roi_widen_at_depth: false,
             search_wide_when_degraded: false,

@@ -73,10 +73,11 @@ impl DepthFallbackCheck {
     ///
     /// A candidate is eligible unless the surroundings contradict its motion: its motion agreement is more than
     /// `motion_margin` below the best of the estimate's and the candidates' (its own unknown, or a negative
-    /// `motion_margin`: eligible). The
-    /// eligible candidate with the highest `agreeing` replaces the estimate if it exceeds the estimate's by more
-    /// than `margin`; on a tie the first wins.
-    pub fn replacement(&self, margin: f64, motion_margin: f64) -> Option<usize> {
+    /// `motion_margin`: eligible). Each eligible candidate scores its `agreeing` plus `event_weight` times how much
+    /// better the events support it than the estimate (`event_support` difference; no bonus when either support
+    /// is unknown or `event_weight` is 0). The best-scoring one replaces the estimate if its score exceeds the
+    /// estimate's `agreeing` by more than `margin`; on a tie the first wins.
+    pub fn replacement(&self, margin: f64, motion_margin: f64, event_weight: f64) -> Option<usize> {
         // The best motion agreement of any hypothesis: the estimate's or a candidate's.
         let best_motion = self
             .candidates
@@ -94,8 +95,13 @@ impl DepthFallbackCheck {
             let Some(c) = c.filter(eligible) else {
                 continue;
             };
-            if best.is_none_or(|(_, b)| c.agreeing > b) {
-                best = Some((k, c.agreeing));
+            let event_bonus = match (c.event_support, self.estimate_event_support) {
+                (Some(v), Some(e)) if event_weight > 0.0 => event_weight * (v - e),
+                _ => 0.0,
+            };
+            let score = c.agreeing + event_bonus;
+            if best.is_none_or(|(_, b)| score > b) {
+                best = Some((k, score));
             }
         }
         best.filter(|&(_, b)| b > self.estimate_agreeing + margin)
@@ -273,8 +279,8 @@ mod tests {
             candidate(prev, 0.4, None),
             candidate(extr, 0.5, None),
         );
-        assert_eq!(c.replacement(0.05, 0.3), Some(1));
-        assert_eq!(c.replacement(0.25, 0.3), None);
+        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(1));
+        assert_eq!(c.replacement(0.25, 0.3, 0.0), None);
         // A candidate whose motion the surroundings contradict is not taken; the other one still can be.
         let c = check(
             0.3,
@@ -282,10 +288,10 @@ mod tests {
             candidate(prev, 0.5, Some(0.95)),
             candidate(extr, 0.7, Some(0.1)),
         );
-        assert_eq!(c.replacement(0.05, 0.3), Some(0));
+        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(0));
         // Within the motion margin, or with the motion check off, it is eligible again.
-        assert_eq!(c.replacement(0.05, 0.85), Some(1));
-        assert_eq!(c.replacement(0.05, -1.0), Some(1));
+        assert_eq!(c.replacement(0.05, 0.85, 0.0), Some(1));
+        assert_eq!(c.replacement(0.05, -1.0, 0.0), Some(1));
         // An unknown motion agreement on either side does not refuse a candidate.
         let c = check(
             0.3,
@@ -293,7 +299,7 @@ mod tests {
             candidate(prev, 0.5, Some(0.0)),
             candidate(extr, 0.2, None),
         );
-        assert_eq!(c.replacement(0.05, 0.3), Some(0));
+        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(0));
         // A candidate whose motion the other candidate explains far better is not taken, even when the estimate
         // explains its motion no better (the thin marker crossing the image: 0.36 / 0.16 against 0.29 / 0.97).
         let c = check(
@@ -302,7 +308,7 @@ mod tests {
             candidate(prev, 0.36, Some(0.16)),
             candidate(extr, 0.29, Some(0.97)),
         );
-        assert_eq!(c.replacement(0.05, 0.3), Some(1));
+        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(1));
         // Every candidate refused: the estimate is kept however poorly it agrees.
         let c = check(
             0.0,
@@ -310,7 +316,7 @@ mod tests {
             candidate(prev, 0.9, Some(0.2)),
             candidate(extr, 0.8, Some(0.3)),
         );
-        assert_eq!(c.replacement(0.05, 0.3), None);
+        assert_eq!(c.replacement(0.05, 0.3, 0.0), None);
         // A missing candidate is skipped.
         let mut c = check(
             0.3,
@@ -319,6 +325,57 @@ mod tests {
             candidate(extr, 0.1, None),
         );
         c.candidates[0] = None;
-        assert_eq!(c.replacement(0.05, 0.3), None);
+        assert_eq!(c.replacement(0.05, 0.3, 0.0), None);
+    }
+
+    #[test]
+    fn event_support_shifts_the_choice_only_when_weighted_and_known() {
+        let with_support = |agreeing: f64, support: Option<f64>| FallbackCandidate {
+            event_support: support,
+            ..candidate(FallbackStart::PreviousDepthPose, agreeing, None)
+        };
+        let check = |estimate_support: Option<f64>, a: FallbackCandidate, b: FallbackCandidate| {
+            DepthFallbackCheck {
+                object: 0,
+                t_us: 0,
+                estimate: Isometry3::identity(),
+                estimate_agreeing: 0.5,
+                estimate_motion_agreeing: None,
+                estimate_event_support: estimate_support,
+                candidates: [Some(a), Some(b)],
+                replaced_by: None,
+            }
+        };
+        // Depth alone prefers the first candidate; the events contradict it and favour the second.
+        let c = check(
+            Some(0.6),
+            with_support(0.62, Some(0.2)),
+            with_support(0.58, Some(0.7)),
+        );
+        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(0));
+        // Weighted, the first drops to 0.62 - 0.4 = 0.22 and the second rises to 0.58 + 0.1 = 0.68.
+        assert_eq!(c.replacement(0.05, 0.3, 1.0), Some(1));
+        // Events that contradict every candidate keep the estimate.
+        let c = check(
+            Some(0.9),
+            with_support(0.62, Some(0.2)),
+            with_support(0.58, Some(0.5)),
+        );
+        assert_eq!(c.replacement(0.05, 0.3, 1.0), None);
+        // Events that favour a candidate let it replace the estimate below the depth-only margin.
+        let c = check(
+            Some(0.3),
+            with_support(0.53, Some(0.6)),
+            with_support(0.4, None),
+        );
+        assert_eq!(c.replacement(0.05, 0.3, 0.0), None);
+        assert_eq!(c.replacement(0.05, 0.3, 0.5), Some(0));
+        // An unknown support on either side gives no bonus.
+        let c = check(
+            None,
+            with_support(0.53, Some(0.6)),
+            with_support(0.4, Some(0.9)),
+        );
+        assert_eq!(c.replacement(0.05, 0.3, 1.0), None);
     }
 }

@@ -92,6 +92,12 @@ impl TrackerConfig {
             "must be a finite number",
         )?;
         check(
+            "depth_fallback_event_weight",
+            self.depth_fallback_event_weight,
+            |v| v >= 0.0,
+            "must be 0 or more",
+        )?;
+        check(
             "carried_depth_weight",
             self.carried_depth_weight,
             non_neg,

@@ -310,6 +310,7 @@ impl ObjectTrack {
             check.replaced_by = check.replacement(
                 config.depth_fallback_margin,
                 config.depth_fallback_motion_margin,
+                config.depth_fallback_event_weight,
             );
             let replacement = check
                 .replaced_by
