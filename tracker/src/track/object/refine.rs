@@ -178,6 +178,8 @@ impl ObjectTrack {
             self.carried.render(&pose, &roi_camera, &mut self.depth_now);
         }
         let mut depth_stats = None;
+        // The final pose's event support, when the safety net already measured it.
+        let mut measured_support = None;
         let mut offset = Vector6::zeros();
         let prior_t = 1.0 / (config.prior_translation_m * config.prior_translation_m);
         let prior_r = 1.0 / config.prior_rotation_rad().powi(2);
@@ -319,9 +321,13 @@ impl ObjectTrack {
                 Some((candidate, stats)) => {
                     pose = candidate.pose;
                     depth_stats = Some(stats);
+                    measured_support = Some(candidate.event_support);
                     self.fallbacks += 1;
                 }
-                None => depth_stats = Some(main_stats),
+                None => {
+                    depth_stats = Some(main_stats);
+                    measured_support = Some(check.estimate_event_support);
+                }
             }
             self.fallback_check = Some(check);
         }
@@ -331,7 +337,8 @@ impl ObjectTrack {
                 .attach_to_object(&pose, &self.aabb_min, &self.aabb_max, 0.01);
         }
         let support = if use_events && self.image_speed(inputs.camera) > 150.0 {
-            self.edges.contour_support(&self.view, &pose, inputs.camera)
+            measured_support
+                .unwrap_or_else(|| self.edges.contour_support(&self.view, &pose, inputs.camera))
         } else {
             None
         };
