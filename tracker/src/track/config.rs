@@ -107,6 +107,12 @@ pub struct TrackerConfig {
     /// Whether the depth-only fallback also starts from the previous depth frame's pose carried on at the velocity
     /// measured between depth frames (and keeps the better of its two results).
     pub depth_fallback_extrapolate: bool,
+    /// Whether the depth-only fallback also starts from the previous depth frame's pose carried on at the motion
+    /// between the two depth frames before it: unlike the extrapolated start, the events since cannot have
+    /// changed that motion, so one tick the events got wrong does not spoil it. On by default: it lifted dev
+    /// ADD-S from 62.2 to 66.7 and holdout from 63.5 to 65.7, and ended `lost` on slow and moderate sequences
+    /// (BENCHMARKS.md, eighteenth round).
+    pub depth_fallback_anchored: bool,
     /// Whether the ROI at a depth exposure grows to also cover the extrapolated fallback start.
     pub roi_widen_at_depth: bool,
     /// Whether a degraded or lost object searches the event term's whole shift range every tick (to catch up
@@ -191,6 +197,7 @@ impl Default for TrackerConfig {
             depth_fallback_motion_margin: 0.3,
             depth_fallback_event_weight: 0.0,
             depth_fallback_extrapolate: true,
+            depth_fallback_anchored: true,
             roi_widen_at_depth: false,
             search_wide_when_degraded: false,
             hide_occluded_outline: false,

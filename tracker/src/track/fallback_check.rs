@@ -10,16 +10,24 @@ use std::fmt::Write as _;
 pub enum FallbackStart {
     /// The estimate at the previous depth frame.
     PreviousDepthPose,
-    /// The estimate at the previous depth frame carried on at the velocity measured between depth frames.
+    /// The estimate at the previous depth frame carried on at the tracker's velocity (measured between depth
+    /// frames and updated by every tick since).
     Extrapolated,
+    /// The estimate at the previous depth frame carried on at the motion between the two depth frames before,
+    /// which the events since cannot have changed.
+    AnchoredMotion,
 }
 
+/// Most depth-only candidates a safety-net check refines (one per [`FallbackStart`]).
+pub const FALLBACK_STARTS: usize = 3;
+
 impl FallbackStart {
-    /// Name in the trace CSV (`previous`, `extrapolated`).
+    /// Name in the trace CSV (`previous`, `extrapolated`, `anchored`).
     pub fn as_str(self) -> &'static str {
         match self {
             Self::PreviousDepthPose => "previous",
             Self::Extrapolated => "extrapolated",
+            Self::AnchoredMotion => "anchored",
         }
     }
 }
@@ -60,7 +68,7 @@ pub struct DepthFallbackCheck {
     /// The same event support for `estimate` as [`FallbackCandidate::event_support`].
     pub estimate_event_support: Option<f64>,
     /// The candidates, in the order they were refined (`None`: that start is not configured).
-    pub candidates: [Option<FallbackCandidate>; 2],
+    pub candidates: [Option<FallbackCandidate>; FALLBACK_STARTS],
     /// Index into `candidates` of the one that replaced the estimate; `None` if the estimate was kept.
     pub replaced_by: Option<usize>,
 }
@@ -194,6 +202,7 @@ mod tests {
                     event_support: Some(0.4),
                 }),
                 None,
+                None,
             ],
             replaced_by: Some(0),
         };
@@ -230,6 +239,7 @@ mod tests {
                     motion_agreeing: None,
                     event_support: None,
                 }),
+                None,
             ],
             ..check
         };
@@ -266,7 +276,7 @@ mod tests {
                     estimate_agreeing: estimate,
                     estimate_motion_agreeing: motion,
                     estimate_event_support: None,
-                    candidates: [Some(a), Some(b)],
+                    candidates: [Some(a), Some(b), None],
                     replaced_by: None,
                 }
             };
@@ -342,7 +352,7 @@ mod tests {
                 estimate_agreeing: 0.5,
                 estimate_motion_agreeing: None,
                 estimate_event_support: estimate_support,
-                candidates: [Some(a), Some(b)],
+                candidates: [Some(a), Some(b), None],
                 replaced_by: None,
             }
         };

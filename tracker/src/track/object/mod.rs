@@ -1,6 +1,7 @@
 //! One tracked object's state and its per-tick refinement.
 
 mod depth_check;
+mod motion;
 mod quality_window;
 mod refine;
 
@@ -38,6 +39,9 @@ pub(crate) struct ObjectTrack {
     pub predicted: Isometry3<f64>,
     /// The estimate at the latest fresh depth frame (time, pose).
     anchor: Option<(i64, Isometry3<f64>)>,
+    /// The estimate at the depth frame before `anchor` (time, pose): with it, the motion between the last two depth
+    /// frames, which the events since cannot have changed.
+    anchor_before: Option<(i64, Isometry3<f64>)>,
     pub quality: f32,
     /// This tick's state (the tracker's own decisions use it).
     pub state: TrackingState,
@@ -111,6 +115,7 @@ impl ObjectTrack {
             velocity: Vector6::zeros(),
             predicted: pose,
             anchor: None,
+            anchor_before: None,
             quality: 1.0,
             state: TrackingState::Tracking,
             reported: ReportedState::new(TrackingState::Tracking),
@@ -162,6 +167,7 @@ impl ObjectTrack {
         self.velocity = track.velocity;
         self.predicted = track.predicted;
         self.anchor = track.anchor;
+        self.anchor_before = track.anchor_before;
         self.quality = track.quality;
         self.state = track.state;
         self.reported = track.reported;
@@ -243,6 +249,7 @@ impl ObjectTrack {
         self.predicted = self.pose;
         self.velocity = Vector6::zeros();
         self.anchor = None;
+        self.anchor_before = None;
         self.low_ticks = 0;
         self.recent_quality.clear();
         self.redetections += 1;
@@ -349,21 +356,14 @@ impl ObjectTrack {
             _ => (self.pose, inputs.dt_s, config.velocity_smoothing),
         };
         if fresh_depth.is_some() {
+            self.anchor_before = self.anchor;
             self.anchor = Some((inputs.t_us, pose));
         }
         if span > 0.0 && self.state != TrackingState::Lost {
             let measured = self.observable_motion(&reference, &pose, span);
             let a = a.clamp(0.0, 1.0);
             let mut v = a * measured + (1.0 - a) * self.velocity;
-            let lin = v.fixed_rows::<3>(0).norm();
-            if lin > config.max_speed {
-                v.fixed_rows_mut::<3>(0).scale_mut(config.max_speed / lin);
-            }
-            let ang = v.fixed_rows::<3>(3).norm();
-            if ang > config.max_angular_speed {
-                v.fixed_rows_mut::<3>(3)
-                    .scale_mut(config.max_angular_speed / ang);
-            }
+            motion::cap_motion(&mut v, config);
             self.velocity = v;
         } else if self.state == TrackingState::Lost {
             self.velocity = Vector6::zeros();
@@ -371,26 +371,6 @@ impl ObjectTrack {
         self.previous = Some((self.t_us, self.pose));
         self.pose = normalise(pose);
         self.t_us = inputs.t_us;
-    }
-}
-
-impl ObjectTrack {
-    /// The velocity that carries `from` to `to` in `span_s` seconds (centre m/s, angular rad/s, camera frame),
-    /// without the spin about any continuous symmetry axis: that rotation leaves the shape unchanged, so what the
-    /// refinement reports about it is noise, and feeding it back would spin the prediction.
-    fn observable_motion(
-        &self,
-        from: &Isometry3<f64>,
-        to: &Isometry3<f64>,
-        span_s: f64,
-    ) -> Vector6<f64> {
-        let v = (self.center_at(to) - self.center_at(from)) / span_s;
-        let mut w = (to.rotation * from.rotation.inverse()).scaled_axis() / span_s;
-        for axis in &self.spin_axes {
-            let a = to.rotation * axis;
-            w -= a * a.dot(&w);
-        }
-        Vector6::new(v.x, v.y, v.z, w.x, w.y, w.z)
     }
 }
 
@@ -456,40 +436,6 @@ mod tests {
         o.state = TrackingState::Tracking;
         o.quality = 0.1;
         assert!(!o.needs_search(&q));
-    }
-
-    #[test]
-    fn velocity_keeps_no_spin_about_a_continuous_symmetry_axis() {
-        let config = TrackerConfig::default();
-        let half = Vector3::new(0.01, 0.01, 0.06);
-        let tilted = Isometry3::from_parts(
-            Translation3::new(0.0, 0.0, 0.6),
-            UnitQuaternion::from_euler_angles(0.4, -0.3, 0.2),
-        );
-        let marker = [Symmetry::Continuous {
-            axis: Vector3::z_axis(),
-            offset: Point3::origin(),
-        }];
-        let symmetric = ObjectTrack::new(1, 0.12, -half, half, tilted, 0, &marker, &config);
-        let plain = ObjectTrack::new(1, 0.12, -half, half, tilted, 0, &[], &config);
-        let turned = |axis: Vector3<f64>, angle: f64| {
-            let mut p = tilted;
-            p.rotation *= UnitQuaternion::from_scaled_axis(axis * angle);
-            p.translation.vector.x += 0.01;
-            p
-        };
-        let span = 0.1;
-        // A turn about the object's own axis (its symmetry): only the translation is motion.
-        let spun = turned(Vector3::z(), 0.3);
-        let w = symmetric.observable_motion(&tilted, &spun, span);
-        assert!((w[0] - 0.1).abs() < 1e-9, "{w}");
-        assert!(w.fixed_rows::<3>(3).norm() < 1e-9, "{w}");
-        let w = plain.observable_motion(&tilted, &spun, span);
-        assert!((w.fixed_rows::<3>(3).norm() - 3.0).abs() < 1e-9, "{w}");
-        // A turn across the axis is seen in the shape and kept.
-        let tipped = turned(Vector3::x(), 0.3);
-        let w = symmetric.observable_motion(&tilted, &tipped, span);
-        assert!((w.fixed_rows::<3>(3).norm() - 3.0).abs() < 1e-9, "{w}");
     }
 
     #[test]

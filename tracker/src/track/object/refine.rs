@@ -6,7 +6,9 @@ use super::{ObjectTrack, TickInputs, add_prior};
 use crate::refine::{EventTermKind, NormalEquations, StepBounds, apply_step, solve_step};
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::estimate::TrackingState;
-use crate::track::fallback_check::{DepthFallbackCheck, FallbackCandidate, FallbackStart};
+use crate::track::fallback_check::{
+    DepthFallbackCheck, FALLBACK_STARTS, FallbackCandidate, FallbackStart,
+};
 use nalgebra::{Isometry3, Translation3, Vector3, Vector6};
 
 impl ObjectTrack {
@@ -278,6 +280,11 @@ impl ObjectTrack {
                     let start = apply_step(&anchor, &self.center_obj, &(self.velocity * span));
                     (FallbackStart::Extrapolated, start)
                 }),
+                config
+                    .depth_fallback_anchored
+                    .then(|| self.anchored_extrapolation(inputs.t_us, config))
+                    .flatten()
+                    .map(|start| (FallbackStart::AnchoredMotion, start)),
             ];
             let main_stats = self.depth_stats_at(&pose, &roi_camera, config);
             let mut check = DepthFallbackCheck {
@@ -291,10 +298,10 @@ impl ObjectTrack {
                     &pose,
                     inputs.camera,
                 ),
-                candidates: [None; 2],
+                candidates: [None; FALLBACK_STARTS],
                 replaced_by: None,
             };
-            let mut candidate_stats = [None; 2];
+            let mut candidate_stats = [None; FALLBACK_STARTS];
             for (k, start) in starts.into_iter().enumerate() {
                 let Some((kind, from)) = start else { continue };
                 let (refined, stats) = self.refine_on_depth(from, &roi_camera, config);
