@@ -134,10 +134,17 @@ fn the_fallback_record_matches_what_the_tracker_published() {
     }
 }
 
-/// Whether the motion check lets `cand` compete: its motion agreement falls short of the estimate's by at most
-/// `motion_margin` (or either is unknown).
+/// Whether the motion check lets `cand` compete: its motion agreement falls short of the best of the estimate's
+/// and every candidate's by at most `motion_margin` (or its own, or all of them, unknown).
 fn motion_ok(c: &DepthFallbackCheck, cand: &FallbackCandidate, motion_margin: f64) -> bool {
-    match (c.estimate_motion_agreeing, cand.motion_agreeing) {
+    let best = c
+        .candidates
+        .iter()
+        .flatten()
+        .filter_map(|k| k.motion_agreeing)
+        .chain(c.estimate_motion_agreeing)
+        .reduce(f64::max);
+    match (best, cand.motion_agreeing) {
         (Some(m), Some(a)) => a >= m - motion_margin,
         _ => true,
     }
