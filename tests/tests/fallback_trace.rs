@@ -11,8 +11,8 @@ use hil_sim::objects::ObjectKind;
 use tracker::eval::{PoseTrack, recording_ticks};
 use tracker::render::CpuRenderer;
 use tracker::track::{
-    DepthFallbackCheck, EventTrack6d, FallbackCandidate, TrackerConfig, recording_object,
-    recording_rig, track_recording,
+    DepthFallbackCheck, EventTrack6d, TrackerConfig, recording_object, recording_rig,
+    track_recording,
 };
 
 /// A marker held in a hand, translating at moderate speed for 1 s (seed 1031, the dev suite's marker
@@ -83,7 +83,7 @@ fn the_fallback_record_matches_what_the_tracker_published() {
                     (p.translation.vector - at.translation.vector).norm()
                 };
                 for cand in c.candidates.iter().flatten() {
-                    if !motion_ok(c, cand, motion_margin) {
+                    if !c.motion_allows(cand, motion_margin) {
                         refused.push((off(&cand.pose), off(&c.estimate)));
                     }
                 }
@@ -134,22 +134,6 @@ fn the_fallback_record_matches_what_the_tracker_published() {
     }
 }
 
-/// Whether the motion check lets `cand` compete: its motion agreement falls short of the best of the estimate's
-/// and every candidate's by at most `motion_margin` (or its own, or all of them, unknown).
-fn motion_ok(c: &DepthFallbackCheck, cand: &FallbackCandidate, motion_margin: f64) -> bool {
-    let best = c
-        .candidates
-        .iter()
-        .flatten()
-        .filter_map(|k| k.motion_agreeing)
-        .chain(c.estimate_motion_agreeing)
-        .reduce(f64::max);
-    match (best, cand.motion_agreeing) {
-        (Some(m), Some(a)) => a >= m - motion_margin,
-        _ => true,
-    }
-}
-
 /// One check is consistent with the rule and with the published pose.
 fn check_decision(
     c: &DepthFallbackCheck,
@@ -169,7 +153,7 @@ fn check_decision(
     }
     let candidates: Vec<_> = all
         .into_iter()
-        .filter(|cand| motion_ok(c, cand, motion_margin))
+        .filter(|cand| c.motion_allows(cand, motion_margin))
         .collect();
     let best = candidates
         .iter()
@@ -188,7 +172,7 @@ fn check_decision(
             );
             assert!(winner.agreeing > c.estimate_agreeing + margin);
             assert!(
-                motion_ok(c, &winner, motion_margin),
+                c.motion_allows(&winner, motion_margin),
                 "t {}: a refused candidate won",
                 c.t_us
             );

@@ -47,8 +47,8 @@ pub struct FallbackCandidate {
     /// the check is off.
     pub motion_agreeing: Option<f64>,
     /// Fraction of the estimate's outline points that land, at `pose`, within two ROI bins of a kept recent event
-    /// ([`crate::refine::EventEdges::contour_support`]), in [0, 1]; `None` without events in the ROI. Recorded
-    /// for the trace; the rule does not use it.
+    /// ([`crate::refine::EventEdges::contour_support`]), in [0, 1]; `None` without events in the ROI. The rule
+    /// uses it only with a positive `depth_fallback_event_weight`.
     pub event_support: Option<f64>,
 }
 
@@ -86,18 +86,7 @@ impl DepthFallbackCheck {
     /// is unknown or `event_weight` is 0). The best-scoring one replaces the estimate if its score exceeds the
     /// estimate's `agreeing` by more than `margin`; on a tie the first wins.
     pub fn replacement(&self, margin: f64, motion_margin: f64, event_weight: f64) -> Option<usize> {
-        // The best motion agreement of any hypothesis: the estimate's or a candidate's.
-        let best_motion = self
-            .candidates
-            .iter()
-            .flatten()
-            .filter_map(|c| c.motion_agreeing)
-            .chain(self.estimate_motion_agreeing)
-            .reduce(f64::max);
-        let eligible = |c: &FallbackCandidate| match (best_motion, c.motion_agreeing) {
-            (Some(m), Some(x)) if motion_margin >= 0.0 => x >= m - motion_margin,
-            _ => true,
-        };
+        let eligible = |c: &FallbackCandidate| self.motion_allows(c, motion_margin);
         let mut best: Option<(usize, f64)> = None;
         for (k, c) in self.candidates.iter().enumerate() {
             let Some(c) = c.filter(eligible) else {
@@ -114,6 +103,26 @@ impl DepthFallbackCheck {
         }
         best.filter(|&(_, b)| b > self.estimate_agreeing + margin)
             .map(|(k, _)| k)
+    }
+
+    /// Whether the motion check lets `candidate` compete ([`Self::replacement`]): its motion agreement is at most
+    /// `motion_margin` below the best of the estimate's and the candidates' (its own or all unknown, or a negative
+    /// `motion_margin`: it may).
+    pub fn motion_allows(&self, candidate: &FallbackCandidate, motion_margin: f64) -> bool {
+        match (self.best_motion_agreeing(), candidate.motion_agreeing) {
+            (Some(m), Some(x)) if motion_margin >= 0.0 => x >= m - motion_margin,
+            _ => true,
+        }
+    }
+
+    /// The best motion agreement of any hypothesis, the estimate's or a candidate's; `None` if all are unknown.
+    fn best_motion_agreeing(&self) -> Option<f64> {
+        self.candidates
+            .iter()
+            .flatten()
+            .filter_map(|c| c.motion_agreeing)
+            .chain(self.estimate_motion_agreeing)
+            .reduce(f64::max)
     }
 
     /// Appends one CSV row per candidate (columns of [`FALLBACK_TRACE_HEADER`]) to `out`; `name` is the object's
