@@ -11,7 +11,7 @@ use hil_sim::objects::ObjectKind;
 use tracker::eval::{PoseTrack, recording_ticks};
 use tracker::render::CpuRenderer;
 use tracker::track::{
-    DepthFallbackCheck, EventTrack6d, TrackerConfig, recording_object, recording_rig,
+    DepthFallbackCheck, EventTrack6d, FallbackRule, TrackerConfig, recording_object, recording_rig,
     track_recording,
 };
 
@@ -42,8 +42,8 @@ fn the_fallback_record_matches_what_the_tracker_published() {
     let object = recording_object(&recording, "marker", first, pose).expect("model");
     let rig = recording_rig(&recording).expect("rig");
     let config = TrackerConfig::default();
-    let margin = config.depth_fallback_margin;
-    let motion_margin = config.depth_fallback_motion_margin;
+    let rule = config.fallback_rule();
+    let motion_margin = rule.motion_margin;
     let mut tracker = EventTrack6d::new(config, rig, vec![object], Box::new(CpuRenderer::new()))
         .expect("tracker");
 
@@ -77,7 +77,7 @@ fn the_fallback_record_matches_what_the_tracker_published() {
                 ticks_with_check.push(tick.index);
                 assert_eq!(c.t_us, tick.t_us);
                 assert_eq!(c.object, 0);
-                check_decision(c, margin, motion_margin, &estimates[0].pose);
+                check_decision(c, &rule, &estimates[0].pose);
                 let at = truth.interpolated_at(c.t_us).expect("truth at the check");
                 let off = |p: &nalgebra::Isometry3<f64>| {
                     (p.translation.vector - at.translation.vector).norm()
@@ -137,10 +137,11 @@ fn the_fallback_record_matches_what_the_tracker_published() {
 /// One check is consistent with the rule and with the published pose.
 fn check_decision(
     c: &DepthFallbackCheck,
-    margin: f64,
-    motion_margin: f64,
+    rule: &FallbackRule,
     published: &nalgebra::Isometry3<f64>,
 ) {
+    let (margin, motion_margin) = (rule.margin, rule.motion_margin);
+    let contradicted = c.estimate_contradicted(rule.estimate_motion_margin);
     assert!((0.0..=1.0).contains(&c.estimate_agreeing));
     let all: Vec<_> = c.candidates.iter().flatten().collect();
     assert!(!all.is_empty(), "a check without candidates");
@@ -170,7 +171,11 @@ fn check_decision(
                 "t {}: not the best candidate",
                 c.t_us
             );
-            assert!(winner.agreeing > c.estimate_agreeing + margin);
+            assert!(
+                contradicted || winner.agreeing > c.estimate_agreeing + margin,
+                "t {}: a candidate no better than the estimate it replaced",
+                c.t_us
+            );
             assert!(
                 c.motion_allows(&winner, motion_margin),
                 "t {}: a refused candidate won",
@@ -186,6 +191,11 @@ fn check_decision(
             assert!(
                 best <= c.estimate_agreeing + margin,
                 "t {}: a better candidate was ignored",
+                c.t_us
+            );
+            assert!(
+                !contradicted || candidates.is_empty(),
+                "t {}: a contradicted estimate kept over an eligible candidate",
                 c.t_us
             );
             assert!(

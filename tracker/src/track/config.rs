@@ -1,5 +1,6 @@
 //! Tracker parameters and the method presets (`eventtrack6d`, `depth30`, `events-only`).
 
+use super::FallbackRule;
 use super::estimate::TrackingState;
 use super::redetect::RedetectConfig;
 use crate::recon::IntensityFilterConfig;
@@ -100,6 +101,11 @@ pub struct TrackerConfig {
     /// [`crate::recon::MovingNeighbourhood`]) falls short of the best one's by at most this. Keeps the safety net from sliding the object onto the hand
     /// that holds it, which moves with it. Negative disables the check.
     pub depth_fallback_motion_margin: f64,
+    /// The surroundings contradict the estimate when its motion agreement since the previous depth frame falls
+    /// short of the best candidate's by more than this; the best eligible candidate then replaces it even if fewer
+    /// model points agree with it (an estimate that jumped onto the hand in front of a mostly hidden object agrees
+    /// with more of the depth than the object does). Negative disables.
+    pub depth_fallback_estimate_motion_margin: f64,
     /// Weight of the events' verdict in the safety net: a candidate's score is its agreeing fraction plus this
     /// times how much more of its contour the recent event edges support than the estimate's
     /// ([`crate::track::DepthFallbackCheck::replacement`]). 0 leaves the choice to depth alone.
@@ -195,6 +201,7 @@ impl Default for TrackerConfig {
             prediction: true,
             depth_fallback_margin: 0.05,
             depth_fallback_motion_margin: 0.3,
+            depth_fallback_estimate_motion_margin: 0.5,
             depth_fallback_event_weight: 0.0,
             depth_fallback_extrapolate: true,
             depth_fallback_anchored: true,
@@ -235,6 +242,16 @@ impl TrackerConfig {
     /// [`Self::prior_rotation_deg`] in radians.
     pub fn prior_rotation_rad(&self) -> f64 {
         self.prior_rotation_deg.to_radians()
+    }
+
+    /// The depth safety net's choice settings, from the `depth_fallback_*` fields.
+    pub fn fallback_rule(&self) -> FallbackRule {
+        FallbackRule {
+            margin: self.depth_fallback_margin,
+            motion_margin: self.depth_fallback_motion_margin,
+            estimate_motion_margin: self.depth_fallback_estimate_motion_margin,
+            event_weight: self.depth_fallback_event_weight,
+        }
     }
 }
 

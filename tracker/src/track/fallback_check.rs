@@ -21,6 +21,21 @@ pub enum FallbackStart {
 /// Most depth-only candidates a safety-net check refines (one per [`FallbackStart`]).
 pub const FALLBACK_STARTS: usize = 3;
 
+/// The safety net's settings for choosing between the estimate and its candidates
+/// ([`DepthFallbackCheck::replacement`]); the `depth_fallback_*` fields of [`crate::track::TrackerConfig`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FallbackRule {
+    /// How much more agreeing a candidate must be than the estimate to replace it.
+    pub margin: f64,
+    /// How far below the best motion agreement a candidate's may fall and still compete; negative: no limit.
+    pub motion_margin: f64,
+    /// How far below the best candidate's motion agreement the estimate's may fall before the surroundings are
+    /// taken to contradict it; negative: never.
+    pub estimate_motion_margin: f64,
+    /// Weight of the events' verdict in a candidate's score (0: depth alone).
+    pub event_weight: f64,
+}
+
 impl FallbackStart {
     /// Name in the trace CSV (`previous`, `extrapolated`, `anchored`).
     pub fn as_str(self) -> &'static str {
@@ -77,23 +92,24 @@ pub struct DepthFallbackCheck {
 pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced,estimate_motion_agreeing,candidate_motion_agreeing,estimate_qx,estimate_qy,estimate_qz,estimate_qw,candidate_qx,candidate_qy,candidate_qz,candidate_qw,estimate_event_support,candidate_event_support";
 
 impl DepthFallbackCheck {
-    /// Index into `candidates` of the one that replaces the estimate, by the safety net's rule; `None` keeps it.
+    /// Index into `candidates` of the one that replaces the estimate, by the safety net's `rule`; `None` keeps it.
     ///
     /// A candidate is eligible unless the surroundings contradict its motion: its motion agreement is more than
-    /// `motion_margin` below the best of the estimate's and the candidates' (its own unknown, or a negative
-    /// `motion_margin`: eligible). Each eligible candidate scores its `agreeing` plus `event_weight` times how much
-    /// better the events support it than the estimate (`event_support` difference; no bonus when either support
-    /// is unknown or `event_weight` is 0). The best-scoring one replaces the estimate if its score exceeds the
-    /// estimate's `agreeing` by more than `margin`; on a tie the first wins.
-    pub fn replacement(&self, margin: f64, motion_margin: f64, event_weight: f64) -> Option<usize> {
-        let eligible = |c: &FallbackCandidate| self.motion_allows(c, motion_margin);
+    /// `rule.motion_margin` below the best of the estimate's and the candidates' ([`Self::motion_allows`]). Each
+    /// eligible candidate scores its `agreeing` plus `rule.event_weight` times how much better the events support
+    /// it than the estimate (`event_support` difference; no bonus when either support is unknown or the weight is
+    /// 0). The best-scoring one (on a tie the first) replaces the estimate if its score exceeds the estimate's
+    /// `agreeing` by more than `rule.margin`, or whatever the scores if the surroundings contradict the estimate's
+    /// own motion ([`Self::estimate_contradicted`]).
+    pub fn replacement(&self, rule: &FallbackRule) -> Option<usize> {
+        let eligible = |c: &FallbackCandidate| self.motion_allows(c, rule.motion_margin);
         let mut best: Option<(usize, f64)> = None;
         for (k, c) in self.candidates.iter().enumerate() {
             let Some(c) = c.filter(eligible) else {
                 continue;
             };
             let event_bonus = match (c.event_support, self.estimate_event_support) {
-                (Some(v), Some(e)) if event_weight > 0.0 => event_weight * (v - e),
+                (Some(v), Some(e)) if rule.event_weight > 0.0 => rule.event_weight * (v - e),
                 _ => 0.0,
             };
             let score = c.agreeing + event_bonus;
@@ -101,8 +117,27 @@ impl DepthFallbackCheck {
                 best = Some((k, score));
             }
         }
-        best.filter(|&(_, b)| b > self.estimate_agreeing + margin)
+        let contradicted = self.estimate_contradicted(rule.estimate_motion_margin);
+        best.filter(|&(_, b)| contradicted || b > self.estimate_agreeing + rule.margin)
             .map(|(k, _)| k)
+    }
+
+    /// Whether the surroundings contradict the estimate's motion since the previous depth frame: its motion
+    /// agreement is more than `estimate_motion_margin` below the best candidate's (either unknown, or a negative
+    /// margin: not contradicted). An estimate that jumped onto the hand in front of the object can agree with
+    /// more depth points than the object itself, mostly hidden behind that hand, yet the surfaces around it do not
+    /// move the way the jump says.
+    pub fn estimate_contradicted(&self, estimate_motion_margin: f64) -> bool {
+        let best_candidate = self
+            .candidates
+            .iter()
+            .flatten()
+            .filter_map(|c| c.motion_agreeing)
+            .reduce(f64::max);
+        match (self.estimate_motion_agreeing, best_candidate) {
+            (Some(e), Some(c)) if estimate_motion_margin >= 0.0 => e < c - estimate_motion_margin,
+            _ => false,
+        }
     }
 
     /// Whether the motion check lets `candidate` compete ([`Self::replacement`]): its motion agreement is at most
@@ -264,6 +299,16 @@ mod tests {
         assert_eq!(&cols[1][23..], &["0.7500", ""]);
     }
 
+    /// A rule with the estimate's own motion never taken as contradicted.
+    fn rule(margin: f64, motion_margin: f64, event_weight: f64) -> FallbackRule {
+        FallbackRule {
+            margin,
+            motion_margin,
+            estimate_motion_margin: -1.0,
+            event_weight,
+        }
+    }
+
     fn candidate(start: FallbackStart, agreeing: f64, motion: Option<f64>) -> FallbackCandidate {
         FallbackCandidate {
             start,
@@ -298,8 +343,8 @@ mod tests {
             candidate(prev, 0.4, None),
             candidate(extr, 0.5, None),
         );
-        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(1));
-        assert_eq!(c.replacement(0.25, 0.3, 0.0), None);
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.0)), Some(1));
+        assert_eq!(c.replacement(&rule(0.25, 0.3, 0.0)), None);
         // A candidate whose motion the surroundings contradict is not taken; the other one still can be.
         let c = check(
             0.3,
@@ -307,10 +352,10 @@ mod tests {
             candidate(prev, 0.5, Some(0.95)),
             candidate(extr, 0.7, Some(0.1)),
         );
-        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(0));
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.0)), Some(0));
         // Within the motion margin, or with the motion check off, it is eligible again.
-        assert_eq!(c.replacement(0.05, 0.85, 0.0), Some(1));
-        assert_eq!(c.replacement(0.05, -1.0, 0.0), Some(1));
+        assert_eq!(c.replacement(&rule(0.05, 0.85, 0.0)), Some(1));
+        assert_eq!(c.replacement(&rule(0.05, -1.0, 0.0)), Some(1));
         // An unknown motion agreement on either side does not refuse a candidate.
         let c = check(
             0.3,
@@ -318,7 +363,7 @@ mod tests {
             candidate(prev, 0.5, Some(0.0)),
             candidate(extr, 0.2, None),
         );
-        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(0));
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.0)), Some(0));
         // A candidate whose motion the other candidate explains far better is not taken, even when the estimate
         // explains its motion no better (the thin marker crossing the image: 0.36 / 0.16 against 0.29 / 0.97).
         let c = check(
@@ -327,7 +372,7 @@ mod tests {
             candidate(prev, 0.36, Some(0.16)),
             candidate(extr, 0.29, Some(0.97)),
         );
-        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(1));
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.0)), Some(1));
         // Every candidate refused: the estimate is kept however poorly it agrees.
         let c = check(
             0.0,
@@ -335,7 +380,7 @@ mod tests {
             candidate(prev, 0.9, Some(0.2)),
             candidate(extr, 0.8, Some(0.3)),
         );
-        assert_eq!(c.replacement(0.05, 0.3, 0.0), None);
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.0)), None);
         // A missing candidate is skipped.
         let mut c = check(
             0.3,
@@ -344,7 +389,60 @@ mod tests {
             candidate(extr, 0.1, None),
         );
         c.candidates[0] = None;
-        assert_eq!(c.replacement(0.05, 0.3, 0.0), None);
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.0)), None);
+    }
+
+    #[test]
+    fn an_estimate_whose_motion_the_surroundings_contradict_gives_way() {
+        // Holdout can rotation moderate at 1.133 s: the estimate jumped 4 cm forward onto the hand that hides most
+        // of the can. More of its model points agree (0.44) than of the candidate's at the can (0.16), but the
+        // surroundings confirm the candidate's motion (0.72) and not the jump (0.0).
+        let check = |estimate_motion: Option<f64>, a: FallbackCandidate, b: FallbackCandidate| {
+            DepthFallbackCheck {
+                object: 0,
+                t_us: 1_133_833,
+                estimate: Isometry3::identity(),
+                estimate_agreeing: 0.44,
+                estimate_motion_agreeing: estimate_motion,
+                estimate_event_support: None,
+                candidates: [Some(a), Some(b), None],
+                replaced_by: None,
+            }
+        };
+        let prev = FallbackStart::PreviousDepthPose;
+        let extr = FallbackStart::Extrapolated;
+        let c = check(
+            Some(0.0),
+            candidate(prev, 0.16, Some(0.72)),
+            candidate(extr, 0.49, Some(0.0)),
+        );
+        let contradicting = FallbackRule {
+            estimate_motion_margin: 0.5,
+            ..rule(0.05, 0.3, 0.0)
+        };
+        assert!(c.estimate_contradicted(0.5));
+        // Without the estimate's check it is kept: the candidate that made the same jump is refused for its motion
+        // and the one at the can agrees with fewer points. With it, that one replaces the estimate.
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.0)), None);
+        assert_eq!(c.replacement(&contradicting), Some(0));
+        // Within the margin, or with the estimate's motion unknown, the agreeing fractions decide as before.
+        assert!(!c.estimate_contradicted(0.8));
+        let unknown = check(
+            None,
+            candidate(prev, 0.16, Some(0.72)),
+            candidate(extr, 0.3, Some(0.0)),
+        );
+        assert!(!unknown.estimate_contradicted(0.5));
+        assert_eq!(unknown.replacement(&contradicting), None);
+        // Without candidates there is nothing to contradict the estimate with: it is kept.
+        let mut none = check(
+            Some(0.0),
+            candidate(prev, 0.16, Some(0.72)),
+            candidate(extr, 0.3, None),
+        );
+        none.candidates = [None; FALLBACK_STARTS];
+        assert!(!none.estimate_contradicted(0.5));
+        assert_eq!(none.replacement(&contradicting), None);
     }
 
     #[test]
@@ -371,30 +469,30 @@ mod tests {
             with_support(0.62, Some(0.2)),
             with_support(0.58, Some(0.7)),
         );
-        assert_eq!(c.replacement(0.05, 0.3, 0.0), Some(0));
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.0)), Some(0));
         // Weighted, the first drops to 0.62 - 0.4 = 0.22 and the second rises to 0.58 + 0.1 = 0.68.
-        assert_eq!(c.replacement(0.05, 0.3, 1.0), Some(1));
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 1.0)), Some(1));
         // Events that contradict every candidate keep the estimate.
         let c = check(
             Some(0.9),
             with_support(0.62, Some(0.2)),
             with_support(0.58, Some(0.5)),
         );
-        assert_eq!(c.replacement(0.05, 0.3, 1.0), None);
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 1.0)), None);
         // Events that favour a candidate let it replace the estimate below the depth-only margin.
         let c = check(
             Some(0.3),
             with_support(0.53, Some(0.6)),
             with_support(0.4, None),
         );
-        assert_eq!(c.replacement(0.05, 0.3, 0.0), None);
-        assert_eq!(c.replacement(0.05, 0.3, 0.5), Some(0));
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.0)), None);
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 0.5)), Some(0));
         // An unknown support on either side gives no bonus.
         let c = check(
             None,
             with_support(0.53, Some(0.6)),
             with_support(0.4, Some(0.9)),
         );
-        assert_eq!(c.replacement(0.05, 0.3, 1.0), None);
+        assert_eq!(c.replacement(&rule(0.05, 0.3, 1.0)), None);
     }
 }

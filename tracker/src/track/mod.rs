@@ -22,7 +22,7 @@ pub use config::{DepthUse, QualityConfig, TrackerConfig, TrackingMethod};
 pub use estimate::{PoseEstimate, ReportedState, TrackingState};
 pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, TrackingRig};
 pub use fallback_check::{
-    DepthFallbackCheck, FALLBACK_TRACE_HEADER, FallbackCandidate, FallbackStart,
+    DepthFallbackCheck, FALLBACK_TRACE_HEADER, FallbackCandidate, FallbackRule, FallbackStart,
 };
 pub use hold::HoldPoseTracker;
 pub use offline::{OfflineStats, track_recording};

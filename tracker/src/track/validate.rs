@@ -92,6 +92,12 @@ impl TrackerConfig {
             "must be a finite number",
         )?;
         check(
+            "depth_fallback_estimate_motion_margin",
+            self.depth_fallback_estimate_motion_margin,
+            |_| true,
+            "must be a finite number",
+        )?;
+        check(
             "depth_fallback_event_weight",
             self.depth_fallback_event_weight,
             |v| v >= 0.0,

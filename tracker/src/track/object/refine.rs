@@ -316,11 +316,7 @@ impl ObjectTrack {
                 });
                 candidate_stats[k] = Some(stats);
             }
-            check.replaced_by = check.replacement(
-                config.depth_fallback_margin,
-                config.depth_fallback_motion_margin,
-                config.depth_fallback_event_weight,
-            );
+            check.replaced_by = check.replacement(&config.fallback_rule());
             let replacement = check
                 .replaced_by
                 .and_then(|k| Some((check.candidates[k]?, candidate_stats[k]?)));
