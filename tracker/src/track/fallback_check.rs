@@ -309,6 +309,25 @@ mod tests {
         }
     }
 
+    /// A check of an estimate (agreeing fraction, motion agreement) against two candidates, without event support.
+    fn two_candidates(
+        estimate_agreeing: f64,
+        estimate_motion_agreeing: Option<f64>,
+        a: FallbackCandidate,
+        b: FallbackCandidate,
+    ) -> DepthFallbackCheck {
+        DepthFallbackCheck {
+            object: 0,
+            t_us: 0,
+            estimate: Isometry3::identity(),
+            estimate_agreeing,
+            estimate_motion_agreeing,
+            estimate_event_support: None,
+            candidates: [Some(a), Some(b), None],
+            replaced_by: None,
+        }
+    }
+
     fn candidate(start: FallbackStart, agreeing: f64, motion: Option<f64>) -> FallbackCandidate {
         FallbackCandidate {
             start,
@@ -321,19 +340,7 @@ mod tests {
 
     #[test]
     fn replacement_takes_the_best_eligible_candidate_above_the_margin() {
-        let check =
-            |estimate: f64, motion: Option<f64>, a: FallbackCandidate, b: FallbackCandidate| {
-                DepthFallbackCheck {
-                    object: 0,
-                    t_us: 0,
-                    estimate: Isometry3::identity(),
-                    estimate_agreeing: estimate,
-                    estimate_motion_agreeing: motion,
-                    estimate_event_support: None,
-                    candidates: [Some(a), Some(b), None],
-                    replaced_by: None,
-                }
-            };
+        let check = two_candidates;
         let prev = FallbackStart::PreviousDepthPose;
         let extr = FallbackStart::Extrapolated;
         // The better-agreeing candidate wins, if it beats the estimate by more than the margin.
@@ -398,16 +405,7 @@ mod tests {
         // of the can. More of its model points agree (0.44) than of the candidate's at the can (0.16), but the
         // surroundings confirm the candidate's motion (0.72) and not the jump (0.0).
         let check = |estimate_motion: Option<f64>, a: FallbackCandidate, b: FallbackCandidate| {
-            DepthFallbackCheck {
-                object: 0,
-                t_us: 1_133_833,
-                estimate: Isometry3::identity(),
-                estimate_agreeing: 0.44,
-                estimate_motion_agreeing: estimate_motion,
-                estimate_event_support: None,
-                candidates: [Some(a), Some(b), None],
-                replaced_by: None,
-            }
+            two_candidates(0.44, estimate_motion, a, b)
         };
         let prev = FallbackStart::PreviousDepthPose;
         let extr = FallbackStart::Extrapolated;
@@ -453,14 +451,8 @@ mod tests {
         };
         let check = |estimate_support: Option<f64>, a: FallbackCandidate, b: FallbackCandidate| {
             DepthFallbackCheck {
-                object: 0,
-                t_us: 0,
-                estimate: Isometry3::identity(),
-                estimate_agreeing: 0.5,
-                estimate_motion_agreeing: None,
                 estimate_event_support: estimate_support,
-                candidates: [Some(a), Some(b), None],
-                replaced_by: None,
+                ..two_candidates(0.5, None, a, b)
             }
         };
         // Depth alone prefers the first candidate; the events contradict it and favour the second.
