@@ -128,13 +128,7 @@ impl DepthFallbackCheck {
     /// more depth points than the object itself, mostly hidden behind that hand, yet the surfaces around it do not
     /// move the way the jump says.
     pub fn estimate_contradicted(&self, estimate_motion_margin: f64) -> bool {
-        let best_candidate = self
-            .candidates
-            .iter()
-            .flatten()
-            .filter_map(|c| c.motion_agreeing)
-            .reduce(f64::max);
-        match (self.estimate_motion_agreeing, best_candidate) {
+        match (self.estimate_motion_agreeing, self.best_candidate_motion()) {
             (Some(e), Some(c)) if estimate_motion_margin >= 0.0 => e < c - estimate_motion_margin,
             _ => false,
         }
@@ -152,11 +146,18 @@ impl DepthFallbackCheck {
 
     /// The best motion agreement of any hypothesis, the estimate's or a candidate's; `None` if all are unknown.
     fn best_motion_agreeing(&self) -> Option<f64> {
+        self.best_candidate_motion()
+            .into_iter()
+            .chain(self.estimate_motion_agreeing)
+            .reduce(f64::max)
+    }
+
+    /// The best motion agreement of the candidates; `None` if all are unknown.
+    fn best_candidate_motion(&self) -> Option<f64> {
         self.candidates
             .iter()
             .flatten()
             .filter_map(|c| c.motion_agreeing)
-            .chain(self.estimate_motion_agreeing)
             .reduce(f64::max)
     }
 
