@@ -38,7 +38,7 @@ fn bench_tracker(c: &mut Criterion, label: &str, mut s: SteadyTracker) {
     depth_tick.depth_frame = Some(s.depth.index);
     c.bench_function(&format!("depth_tick_{label}_160"), |b| {
         b.iter(|| {
-            s.tracker.push_depth(depth_tick.t_us, &s.depth);
+            s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
             out.clear();
             s.tracker.tick(&depth_tick, &mut out);
         })
@@ -66,7 +66,7 @@ fn bench_render_share(c: &mut Criterion, label: &str, mut s: SteadyTracker, spen
         b.iter_custom(|iters| {
             spent_ns.store(0, Ordering::Relaxed);
             for _ in 0..iters {
-                s.tracker.push_depth(depth_tick.t_us, &s.depth);
+                s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
                 out.clear();
                 s.tracker.tick(&depth_tick, &mut out);
             }

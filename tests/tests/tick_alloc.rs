@@ -54,7 +54,7 @@ fn steady_state_ticks_do_not_allocate() {
         depth_tick.depth_frame = Some(s.depth.index);
         for _ in 0..2 {
             s.tracker.push_events(&events);
-            s.tracker.push_depth(depth_tick.t_us, &s.depth);
+            s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
             out.clear();
             s.tracker.tick(&depth_tick, &mut out);
             out.clear();
@@ -65,7 +65,7 @@ fn steady_state_ticks_do_not_allocate() {
         for k in 0..10 {
             s.tracker.push_events(&events);
             if k % 4 == 0 {
-                s.tracker.push_depth(depth_tick.t_us, &s.depth);
+                s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
                 out.clear();
                 s.tracker.tick(&depth_tick, &mut out);
             } else {

@@ -129,7 +129,7 @@ impl PoseTracker for Probe {
     fn push_events(&mut self, events: &[CdEvent]) {
         self.inner.push_events(events);
     }
-    fn push_depth(&mut self, t_us: i64, frame: &DepthFrame) {
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
         self.depth_pending = true;
         self.inner.push_depth(t_us, frame);
     }

@@ -91,7 +91,7 @@ mod tests {
         fn push_events(&mut self, events: &[CdEvent]) {
             self.0.extend(events.iter().map(|e| e.t_us));
         }
-        fn push_depth(&mut self, _: i64, _: &DepthFrame) {}
+        fn push_depth(&mut self, _: i64, _: &mut DepthFrame) {}
         fn tick(&mut self, _: &Tick, _: &mut Vec<PoseEstimate>) {}
         fn pose_at(&self, _: usize, _: i64) -> Option<PoseEstimate> {
             None

@@ -157,8 +157,8 @@ impl Worker {
                     self.queue.recycle(events);
                     self.health().events += n;
                 }
-                Ingest::Depth { t_us, frame } => {
-                    self.tracker.push_depth(t_us, &frame);
+                Ingest::Depth { t_us, mut frame } => {
+                    self.tracker.push_depth(t_us, &mut frame);
                     self.health().depth_frames += 1;
                 }
                 Ingest::Trigger { edge, decoded_at } => {

@@ -32,7 +32,7 @@ impl PoseTracker for HoldPoseTracker {
         &self.names
     }
     fn push_events(&mut self, _events: &[CdEvent]) {}
-    fn push_depth(&mut self, _t_us: i64, _frame: &DepthFrame) {}
+    fn push_depth(&mut self, _t_us: i64, _frame: &mut DepthFrame) {}
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
         self.last_tick_us = Some(tick.t_us);
         out.extend(

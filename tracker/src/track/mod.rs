@@ -41,8 +41,10 @@ pub trait PoseTracker: Send {
     fn objects(&self) -> &[String];
     /// Events in time order (non-decreasing `t_us`), all at or before the next tick.
     fn push_events(&mut self, events: &[CdEvent]);
-    /// The depth frame exposed at time `t_us` (the depth-exposure tick), in the depth camera's pixels.
-    fn push_depth(&mut self, t_us: i64, frame: &DepthFrame);
+    /// The depth frame exposed at time `t_us` (the depth-exposure tick), in the depth camera's pixels. A tracker
+    /// that keeps the frame takes it without a copy and leaves its previous frame in `frame` (for the caller to
+    /// reuse or drop); one that does not leaves `frame` as it is.
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame);
     /// Estimates every object's pose at `tick` and appends one [`PoseEstimate`] per object to `out`.
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>);
     /// The pose of object `object` at any time `t_us` (interpolated between ticks, extrapolated at most one tick

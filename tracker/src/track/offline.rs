@@ -69,8 +69,8 @@ pub fn track_recording(
         }
         if let Some(n) = tick.depth_frame {
             if recording.depth_frames.contains(&n) {
-                let frame = recording.depth_frame(n)?;
-                tracker.push_depth(tick.t_us, &frame);
+                let mut frame = recording.depth_frame(n)?;
+                tracker.push_depth(tick.t_us, &mut frame);
                 stats.depth_frames += 1;
             } else {
                 stats.depth_frames_missing += 1;

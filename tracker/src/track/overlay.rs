@@ -176,7 +176,7 @@ impl super::PoseTracker for PosePlayback {
     fn push_events(&mut self, events: &[drivers::event::CdEvent]) {
         self.surface.integrate(events);
     }
-    fn push_depth(&mut self, _t_us: i64, _frame: &drivers::recording::DepthFrame) {}
+    fn push_depth(&mut self, _t_us: i64, _frame: &mut drivers::recording::DepthFrame) {}
     fn tick(&mut self, tick: &drivers::timeline::Tick, out: &mut Vec<PoseEstimate>) {
         for k in 0..self.names.len() {
             if let Some(e) = self.pose_at(k, tick.t_us) {

@@ -330,15 +330,11 @@ impl PoseTracker for EventTrack6d {
         }
     }
 
-    fn push_depth(&mut self, t_us: i64, frame: &DepthFrame) {
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
         if self.depth_t_us.is_some() {
             self.counters.depth_frames_unused += 1;
         }
-        self.depth.index = frame.index;
-        self.depth.width = frame.width;
-        self.depth.height = frame.height;
-        self.depth.depth_m.clear();
-        self.depth.depth_m.extend_from_slice(&frame.depth_m);
+        std::mem::swap(&mut self.depth, frame);
         self.depth_t_us = Some(t_us);
     }
 
