@@ -10,14 +10,13 @@ use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use tracker::eval::{PoseRow, parse_pose_csv};
-use tracker::render::CpuRenderer;
-use tracker::render::RendererKind;
+use tracker::render::{CpuRenderer, RendererKind};
 use tracker::runtime::setup::recording_scene;
 use tracker::runtime::{self, Config, Hooks, build_tracker};
 use tracker::track::{PoseTracker, TrackerConfig, track_recording};
 
 /// A pushed depth frame moves into the tracker, which hands back the frame it held: the samples are never
-/// copied (a 640x480 frame is 1.2 MB, on the depth tick's latency).
+/// copied (an 848x480 frame is 1.6 MB, on the depth tick's latency).
 #[test]
 fn a_pushed_depth_frame_moves_in_and_the_previous_one_comes_back() {
     let dir = tempfile::tempdir().unwrap();
