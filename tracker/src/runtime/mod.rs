@@ -18,18 +18,18 @@ pub mod replay;
 pub mod setup;
 pub mod sinks;
 pub mod source;
+pub mod summary;
 pub mod worker;
 
 pub use config::{Config, ConfigError, Pace, SourceKind};
 pub use health::{Health, LatencyHistogram, LatencySummary};
 pub use setup::{OutputPaths, SceneObject, TrackerScene, build_tracker};
 pub use source::{Source, SourceError, SourceOutput, SourceStats, StopFlag};
+pub use summary::{SinkSummary, Summary};
 
-use crate::publish::{PublishError, SinkCounters};
-use crate::track::TrackerCounters;
+use crate::publish::PublishError;
 use drivers::recording::RecordingError;
-use drivers::timeline::TimelineCounters;
-use queue::{Ingest, IngestQueue, QueueCounters};
+use queue::{Ingest, IngestQueue};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use worker::Worker;
@@ -95,137 +95,6 @@ impl Default for Hooks {
             stop: StopFlag::new(),
             ctrl_c: false,
         }
-    }
-}
-
-/// One sink's totals.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct SinkSummary {
-    /// Sink name.
-    pub name: String,
-    /// Counters.
-    pub counters: SinkCounters,
-    /// Publish calls that failed.
-    pub errors: u64,
-    /// Latency from edge decoded to after this sink.
-    pub latency: LatencySummary,
-}
-
-/// What a run did.
-#[derive(Debug, Clone)]
-pub struct Summary {
-    /// The source.
-    pub source: String,
-    /// Objects tracked.
-    pub objects: Vec<String>,
-    /// Ticks processed.
-    pub ticks: u64,
-    /// Pose estimates handed to the sinks.
-    pub poses: u64,
-    /// Wall-clock duration of the run (source start to tracker end), seconds.
-    pub wall_s: f64,
-    /// Ticks per wall-clock second between the first and the last tick.
-    pub tick_rate_hz: Option<f64>,
-    /// Ticks per second of the event camera's clock.
-    pub camera_tick_rate_hz: Option<f64>,
-    /// Latency from a tick's edge decoded to after the last sink.
-    pub latency: LatencySummary,
-    /// Per sink.
-    pub sinks: Vec<SinkSummary>,
-    /// Queue counters (dropped events).
-    pub queue: QueueCounters,
-    /// Timeline counters (missing, extra, jittered pulses).
-    pub timeline: TimelineCounters,
-    /// What the source read.
-    pub source_stats: SourceStats,
-    /// The tracker's counters at the end (`None` for a tracker that keeps none).
-    pub tracker: Option<TrackerCounters>,
-    /// Whether the run was stopped early (Ctrl-C or the caller).
-    pub stopped: bool,
-    /// File outputs.
-    pub outputs: OutputPaths,
-    /// The last status document.
-    pub status: serde_json::Value,
-    /// Errors at shutdown (flush, close), by sink.
-    pub shutdown_errors: Vec<String>,
-}
-
-impl std::fmt::Display for Summary {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let rate = |r: Option<f64>| r.map_or_else(|| "-".to_string(), |r| format!("{r:.1} Hz"));
-        writeln!(f, "source:          {}", self.source)?;
-        writeln!(
-            f,
-            "poses published: {} ({} ticks x {} objects: {}){}",
-            self.poses,
-            self.ticks,
-            self.objects.len(),
-            self.objects.join(", "),
-            if self.stopped { ", stopped early" } else { "" }
-        )?;
-        writeln!(
-            f,
-            "rate:            {} wall clock ({} on the camera clock) over {:.2} s",
-            rate(self.tick_rate_hz),
-            rate(self.camera_tick_rate_hz),
-            self.wall_s
-        )?;
-        writeln!(
-            f,
-            "latency:         {} (edge decoded -> after all sinks)",
-            self.latency
-        )?;
-        for s in &self.sinks {
-            writeln!(
-                f,
-                "  {:<14} {} | published {} failed {} dropped {}",
-                s.name, s.latency, s.counters.published, s.counters.failed, s.counters.dropped
-            )?;
-        }
-        let t = &self.timeline;
-        writeln!(
-            f,
-            "drops:           {} events in {} batches (queue overload), {} poses in sinks",
-            self.queue.dropped_events,
-            self.queue.dropped_batches,
-            self.sinks.iter().map(|s| s.counters.dropped).sum::<u64>()
-        )?;
-        writeln!(
-            f,
-            "timeline:        {} pulses, {} missing, {} extra, {} jittered, {} phase errors; depth frames {} ({} missing)",
-            t.pulses,
-            t.missing,
-            t.extra,
-            t.jittered,
-            t.phase_errors,
-            self.source_stats.depth_frames,
-            self.source_stats.depth_missing
-        )?;
-        if let Some(c) = &self.tracker {
-            writeln!(
-                f,
-                "tracker:         {} re-detections ({} places checked, {} dropped), {} depth fallbacks, {} render errors, {} depth frames unused",
-                c.redetections,
-                c.redetect_places_checked,
-                c.redetect_places_dropped,
-                c.depth_fallbacks,
-                c.render_errors,
-                c.depth_frames_unused
-            )?;
-        }
-        if !self.source_stats.anomalies.is_empty() {
-            let a: Vec<String> = self
-                .source_stats
-                .anomalies
-                .iter()
-                .map(|(k, n)| format!("{k} {n}"))
-                .collect();
-            writeln!(f, "decode anomalies: {}", a.join(", "))?;
-        }
-        for e in &self.shutdown_errors {
-            writeln!(f, "shutdown error:  {e}")?;
-        }
-        Ok(())
     }
 }
 
