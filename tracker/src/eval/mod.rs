@@ -6,6 +6,7 @@
 
 pub mod bench;
 mod frame;
+mod harness_checks;
 mod kdtree;
 pub mod plot;
 mod pose_csv;
