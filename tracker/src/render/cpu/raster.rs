@@ -258,9 +258,9 @@ fn rasterise(
     let mut bias = [0i64; 3];
     for (k, &(a, b)) in edges.iter().enumerate() {
         row[k] = edge(&v[a], &v[b], px, py);
+        bias[k] = fill_bias(&v[a], &v[b]);
         step_x[k] = -(v[b].y - v[a].y) * SUBPIXEL;
         step_y[k] = (v[b].x - v[a].x) * SUBPIXEL;
-        bias[k] = fill_bias(&v[a], &v[b]);
     }
     // Inverse depth and the perspective-weighted barycentric tags are affine in the pixel position: evaluate them as
     // planes `value = v0 + vx * dx + vy * dy` relative to the box's first pixel centre (f64 setup, f32 per pixel).
@@ -278,6 +278,10 @@ fn rasterise(
     let inv_z = plane(iz);
     let tag1 = plane([0, 1, 2].map(|k| iz[k] * f64::from(v[k].b.y)));
     let tag2 = plane([0, 1, 2].map(|k| iz[k] * f64::from(v[k].b.z)));
+    // The fill rule's bias folded in: a pixel is covered where every edge value is >= 0.
+    for k in 0..3 {
+        row[k] += bias[k];
+    }
     for y in y0..=y1 {
         let dy = (y - y0) as f32;
         let (iz_row, b1_row, b2_row) = (
@@ -285,28 +289,84 @@ fn rasterise(
             tag1[0] + tag1[2] * dy,
             tag2[0] + tag2[2] * dy,
         );
-        let mut e = row;
-        let base = y as usize * vis.width;
-        for x in x0..=x1 {
-            if (e[0] + bias[0]) | (e[1] + bias[1]) | (e[2] + bias[2]) >= 0 {
-                let dx = (x - x0) as f32;
-                let w = iz_row + inv_z[1] * dx;
-                let idx = base + x as usize;
-                // Larger inverse depth = nearer; ties keep the first drawn fragment (deterministic order).
-                if w > vis.inv_z[idx] {
-                    let z = 1.0 / w;
-                    vis.inv_z[idx] = w;
-                    vis.instance[idx] = instance;
-                    vis.triangle[idx] = triangle;
-                    vis.bary[idx] = [(b1_row + tag1[1] * dx) * z, (b2_row + tag2[1] * dx) * z];
-                }
-            }
-            for k in 0..3 {
-                e[k] += step_x[k];
-            }
-        }
+        let span = covered_span(&row, &step_x, x1 - x0);
         for k in 0..3 {
             row[k] += step_y[k];
         }
+        let Some((first, last)) = span else {
+            continue;
+        };
+        let base = y as usize * vis.width + x0 as usize;
+        for d in first..last + 1 {
+            let dx = d as f32;
+            let w = iz_row + inv_z[1] * dx;
+            let idx = base + d as usize;
+            // Larger inverse depth = nearer; ties keep the first drawn fragment (deterministic order).
+            if w > vis.inv_z[idx] {
+                let z = 1.0 / w;
+                vis.inv_z[idx] = w;
+                vis.instance[idx] = instance;
+                vis.triangle[idx] = triangle;
+                vis.bary[idx] = [(b1_row + tag1[1] * dx) * z, (b2_row + tag2[1] * dx) * z];
+            }
+        }
+    }
+}
+
+/// The offsets `d` in `0..=last` from a row's first pixel where every edge value `row[k] + d * step_x[k]` is
+/// non-negative, as `(first, last)`; `None` when there are none. Exact integer bounds, so the row covers the same
+/// pixels a per-pixel test would.
+#[inline]
+fn covered_span(row: &[i64; 3], step_x: &[i64; 3], last: i64) -> Option<(i64, i64)> {
+    let (mut lo, mut hi) = (0i64, last);
+    for k in 0..3 {
+        let (e, s) = (row[k], step_x[k]);
+        if s > 0 {
+            if e < 0 {
+                // Smallest d with e + d s >= 0: ceil(-e / s).
+                lo = lo.max((-e + s - 1) / s);
+            }
+        } else if s < 0 {
+            if e < 0 {
+                return None;
+            }
+            // Largest d with e + d s >= 0: floor(e / -s).
+            hi = hi.min(e / -s);
+        } else if e < 0 {
+            return None;
+        }
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The span covers exactly the offsets a per-pixel test of the three edge values accepts.
+        #[test]
+        fn covered_span_equals_the_per_pixel_test(
+            row in proptest::array::uniform3(-1_000_000i64..1_000_000),
+            step_x in proptest::array::uniform3(-40_000i64..40_000),
+            last in 0i64..64,
+        ) {
+            let covered = |d: i64| (0..3).all(|k| row[k] + d * step_x[k] >= 0);
+            let expected: Vec<i64> = (0..=last).filter(|&d| covered(d)).collect();
+            let got: Vec<i64> = covered_span(&row, &step_x, last)
+                .map(|(a, b)| (a..=b).collect())
+                .unwrap_or_default();
+            prop_assert_eq!(got, expected);
+        }
+    }
+
+    #[test]
+    fn covered_span_handles_edges_parallel_to_the_row() {
+        // A zero step keeps the whole row or none of it.
+        assert_eq!(covered_span(&[0, 5, 5], &[0, 1, -1], 3), Some((0, 3)));
+        assert_eq!(covered_span(&[-1, 5, 5], &[0, 1, -1], 3), None);
+        // Bounds meet in a single pixel.
+        assert_eq!(covered_span(&[-3, 3, 0], &[3, -3, 0], 5), Some((1, 1)));
     }
 }
