@@ -176,6 +176,11 @@ pub struct EventEdges {
     warped: Vec<f32>,
     /// Contour points' inside and outside probe bins of the shift search (ROI grid).
     probes: Vec<[[i32; 2]; 4]>,
+    /// Shift search scratch: the probes as indices into [`Self::padded`].
+    probe_index: Vec<[usize; 4]>,
+    /// Shift search scratch: the kept bins (1, else 0) inside a border of zeros wide enough that every shifted
+    /// probe reads inside it.
+    padded: Vec<u8>,
     /// Shift search scratch: the coarse grid's scores and shifts (ROI bins).
     shift_scores: Vec<(i64, i64, i64)>,
     /// Contour points projected at the association pose, full-image pixels (NaN behind the camera).

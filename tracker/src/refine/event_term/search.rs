@@ -23,7 +23,7 @@ impl EventEdges {
         motion_dir: Option<[f64; 2]>,
     ) -> Option<[f64; 2]> {
         let roi = self.roi?;
-        if range_px <= 0.0 || view.contour.is_empty() {
+        if range_px <= 0.0 || view.contour.is_empty() || self.width == 0 || self.height == 0 {
             return None;
         }
         let sx = f64::from(self.width) / roi.width;
@@ -45,20 +45,51 @@ impl EventEdges {
         if self.probes.is_empty() {
             return None;
         }
-        let kept = &self.kept;
-        let occ = |p: [i32; 2], di: i64, dj: i64| -> i64 {
-            let (i, j) = (i64::from(p[0]) + di, i64::from(p[1]) + dj);
-            i64::from(i >= 0 && j >= 0 && i < wi && j < hi && kept[(j * wi + i) as usize])
-        };
+        let range = (range_px * sx).round() as i64;
+        // Every probe reads a zero-padded copy of the grid, so no shift needs a bounds check. The border covers
+        // the probes' overshoot past the grid plus the range. A probe farther out than `range + 3` is moved in
+        // to that distance: no shift in range brings it onto the grid either way.
+        let overshoot = self
+            .probes
+            .iter()
+            .flatten()
+            .map(|&[i, j]| {
+                let (i, j) = (i64::from(i), i64::from(j));
+                (-i).max(i - (wi - 1)).max(-j).max(j - (hi - 1))
+            })
+            .max()
+            .unwrap_or(0);
+        let margin = overshoot.max(3).min(range + 3);
+        let pad = range + margin;
+        let (wp, hp) = (wi + 2 * pad, hi + 2 * pad);
+        self.padded.clear();
+        self.padded.resize((wp * hp) as usize, 0);
+        for (src, dst) in self
+            .kept
+            .chunks_exact(wi as usize)
+            .zip(self.padded[(pad * wp) as usize..].chunks_exact_mut(wp as usize))
+        {
+            for (d, &k) in dst[pad as usize..].iter_mut().zip(src) {
+                *d = u8::from(k);
+            }
+        }
+        self.probe_index.clear();
+        self.probe_index.extend(self.probes.iter().map(|q| {
+            q.map(|[i, j]| {
+                let i = i64::from(i).clamp(-margin, wi - 1 + margin);
+                let j = i64::from(j).clamp(-margin, hi - 1 + margin);
+                ((j + pad) * wp + i + pad) as usize
+            })
+        }));
+        let (padded, probe_index) = (&self.padded, &self.probe_index);
         let score = |di: i64, dj: i64| -> i64 {
-            self.probes
+            let off = dj * wp + di;
+            let at = |k: usize| i64::from(padded[(k as i64 + off) as usize]);
+            probe_index
                 .iter()
-                .map(|q| {
-                    occ(q[0], di, dj) + occ(q[1], di, dj) - occ(q[2], di, dj) - occ(q[3], di, dj)
-                })
+                .map(|q| at(q[0]) + at(q[1]) - at(q[2]) - at(q[3]))
                 .sum()
         };
-        let range = (range_px * sx).round() as i64;
         let base = score(0, 0);
         let mut best = (base, 0i64, 0i64);
         let coarse = 3i64;
