@@ -4,18 +4,25 @@
 //! Each pixel keeps its log-intensity estimate `L` and the time of its last event. An event of polarity `p` at
 //! time `t` decays `L` by `exp(-alpha (t - t_last))` and adds `+-contrast`. Reading at time `t` applies the decay
 //! since the last event. The same per-pixel timestamps are the tracker's time surface (latest event per pixel).
+//!
+//! A surface can also keep the timestamps alone ([`EventSurface::latest_times_only`]): the event term reads only
+//! those, and an event then costs one store instead of a read-decay-write of two arrays (about 4x less).
 
 use drivers::event::CdEvent;
 
 /// Parameters of the log-intensity filter.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct IntensityFilterConfig {
     /// Log-intensity step per event (the sensor's mean contrast threshold), unitless; the simulator draws
     /// thresholds from U(0.16, 0.34).
     pub contrast: f32,
     /// High-pass cut-off, 1/s: how fast the estimate forgets (larger = less smear, less static detail).
     pub cutoff_hz: f32,
+    /// Reconstruct `I_t` even when no residual term reads it (the intensity term's weight is 0), e.g. for
+    /// overlays of the tracker's own state; `track --overlay` sets it. Off, and with the intensity term off, the
+    /// tracker keeps only the latest event time per pixel. Poses do not depend on it.
+    pub always: bool,
 }
 
 impl Default for IntensityFilterConfig {
@@ -23,6 +30,7 @@ impl Default for IntensityFilterConfig {
         Self {
             contrast: 0.25,
             cutoff_hz: 20.0,
+            always: false,
         }
     }
 }
@@ -38,12 +46,16 @@ const BASE_MARGIN_US: i64 = 1 << 29;
 /// Offsets at or past this move the base forward (about 2 minutes of headroom before the i32 range ends).
 const REBASE_AT_US: i64 = i32::MAX as i64 - (1 << 27);
 
-/// The full-sensor event state: log intensity and latest event time per pixel.
+/// The full-sensor event state: log intensity (unless built with [`Self::latest_times_only`]) and latest event
+/// time per pixel.
 #[derive(Debug, Clone)]
 pub struct EventSurface {
     width: u32,
     height: u32,
     config: IntensityFilterConfig,
+    /// Whether `log_intensity` is kept.
+    intensity: bool,
+    /// Log intensity per pixel, row-major; empty if the surface keeps times only.
     log_intensity: Vec<f32>,
     /// Latest event time per pixel as an offset from `base_us`, microseconds ([`NEVER`] if none): half the
     /// memory of absolute times, which the per-tick event binning reads for a whole ROI.
@@ -59,18 +71,39 @@ pub struct EventSurface {
 impl EventSurface {
     /// A surface for a `width x height` sensor with every pixel at log intensity 0 and no event.
     pub fn new(width: u32, height: u32, config: IntensityFilterConfig) -> Self {
+        Self::with_intensity(width, height, config, true)
+    }
+
+    /// A surface for a `width x height` sensor that keeps only the latest event time per pixel:
+    /// [`Self::log_intensity_at`] reads 0 everywhere.
+    pub fn latest_times_only(width: u32, height: u32) -> Self {
+        Self::with_intensity(width, height, IntensityFilterConfig::default(), false)
+    }
+
+    fn with_intensity(
+        width: u32,
+        height: u32,
+        config: IntensityFilterConfig,
+        intensity: bool,
+    ) -> Self {
         let n = width as usize * height as usize;
         Self {
             width,
             height,
             config,
-            log_intensity: vec![0.0; n],
+            intensity,
+            log_intensity: if intensity { vec![0.0; n] } else { Vec::new() },
             last_us: vec![NEVER; n],
             base_us: None,
             rebases: 0,
             events: 0,
             out_of_bounds: 0,
         }
+    }
+
+    /// Whether the surface reconstructs the log intensity (false for [`Self::latest_times_only`]).
+    pub fn reconstructs_intensity(&self) -> bool {
+        self.intensity
     }
 
     /// Sensor width, pixels.
@@ -106,22 +139,31 @@ impl EventSurface {
                 self.out_of_bounds += 1;
                 continue;
             }
-            let base = *self.base_us.get_or_insert(e.t_us - BASE_MARGIN_US);
-            let mut offset = e.t_us - base;
-            if offset >= REBASE_AT_US {
-                self.rebase(e.t_us - BASE_MARGIN_US);
-                offset = BASE_MARGIN_US;
-            }
-            let base = self.base_us.unwrap_or(0);
+            let (base, offset) = self.base_and_offset(e.t_us);
             let i = e.y as usize * w + e.x as usize;
-            let dt = (e.t_us - (base + i64::from(self.last_us[i]))).max(0) as f32;
-            let decay = decay(alpha * dt);
-            let step = if e.polarity { c } else { -c };
-            self.log_intensity[i] = self.log_intensity[i] * decay + step;
-            // An event far older than the first one (not time-ordered) is kept as the oldest storable time.
-            self.last_us[i] = offset.max(i64::from(NEVER) + 1) as i32;
+            if self.intensity {
+                let dt = (e.t_us - (base + i64::from(self.last_us[i]))).max(0) as f32;
+                let decay = decay(alpha * dt);
+                let step = if e.polarity { c } else { -c };
+                self.log_intensity[i] = self.log_intensity[i] * decay + step;
+            }
+            self.last_us[i] = offset;
         }
         self.events += events.len() as u64;
+    }
+
+    /// The base in use for an event at `t_us` (moved forward first if the offset would leave the storable range),
+    /// and the event's stored offset. An event far older than the first one (not time-ordered) is stored as the
+    /// oldest storable time.
+    #[inline]
+    fn base_and_offset(&mut self, t_us: i64) -> (i64, i32) {
+        let base = *self.base_us.get_or_insert(t_us - BASE_MARGIN_US);
+        let offset = t_us - base;
+        if offset >= REBASE_AT_US {
+            self.rebase(t_us - BASE_MARGIN_US);
+            return (t_us - BASE_MARGIN_US, BASE_MARGIN_US as i32);
+        }
+        (base, offset.max(i64::from(NEVER) + 1) as i32)
     }
 
     /// Moves the base to `base_us`: offsets are shifted, and times older than the new range become the oldest
@@ -238,10 +280,11 @@ impl EventSurface {
         }
     }
 
-    /// Reconstructed log intensity at pixel `(x, y)` at time `t_us` (0 outside the sensor).
+    /// Reconstructed log intensity at pixel `(x, y)` at time `t_us` (0 outside the sensor, and everywhere if the
+    /// surface keeps times only).
     #[inline]
     pub fn log_intensity_at(&self, x: u32, y: u32, t_us: i64) -> f32 {
-        if x >= self.width || y >= self.height {
+        if x >= self.width || y >= self.height || !self.intensity {
             return 0.0;
         }
         let i = y as usize * self.width as usize + x as usize;
@@ -290,6 +333,7 @@ mod tests {
         let cfg = IntensityFilterConfig {
             contrast: 1.0,
             cutoff_hz: 2.0,
+            ..Default::default()
         };
         let mut s = EventSurface::new(2, 2, cfg);
         s.integrate(&[ev(0, 0, 0, true)]);
@@ -351,6 +395,41 @@ mod tests {
             let mut got = Vec::new();
             s.for_each_recent_in_row(y, x0, x1, step, since, until, |x| got.push(x));
             proptest::prop_assert_eq!(got, expected);
+        }
+    }
+
+    proptest::proptest! {
+        /// A times-only surface stores exactly the times (and counts) of a full one, across rebases and
+        /// out-of-sensor events, and reads no intensity.
+        #[test]
+        fn times_only_surface_keeps_the_same_times(
+            steps in proptest::collection::vec((0i64..3_000_000_000, 0u16..5, 0u16..4, proptest::bool::ANY), 0..40),
+        ) {
+            let mut t = 1_000_000i64;
+            let events: Vec<CdEvent> = steps
+                .iter()
+                .map(|&(dt, x, y, p)| {
+                    t += dt;
+                    ev(t, x, y, p)
+                })
+                .collect();
+            let mut full = EventSurface::new(4, 3, IntensityFilterConfig::default());
+            let mut times = EventSurface::latest_times_only(4, 3);
+            for chunk in events.chunks(7) {
+                full.integrate(chunk);
+                times.integrate(chunk);
+            }
+            proptest::prop_assert!(full.reconstructs_intensity());
+            proptest::prop_assert!(!times.reconstructs_intensity());
+            proptest::prop_assert_eq!(full.events(), times.events());
+            proptest::prop_assert_eq!(full.out_of_bounds(), times.out_of_bounds());
+            proptest::prop_assert_eq!(full.rebases(), times.rebases());
+            for y in 0..4 {
+                for x in 0..5 {
+                    proptest::prop_assert_eq!(full.last_event_us(x, y), times.last_event_us(x, y));
+                    proptest::prop_assert_eq!(times.log_intensity_at(x, y, t), 0.0);
+                }
+            }
         }
     }
 

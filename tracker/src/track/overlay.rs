@@ -148,6 +148,12 @@ impl OverlayWriter {
         if !index.is_multiple_of(self.every) {
             return Ok(());
         }
+        if !surface.reconstructs_intensity() {
+            return Err(
+                "the tracker keeps no intensity I_t to draw (set its `intensity.always = true`)"
+                    .into(),
+            );
+        }
         let img = self
             .renderer
             .draw(surface, t_us, estimates)

@@ -81,7 +81,9 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             args.method
         )
     })?;
-    let base = tracker_params(args.params.as_deref())?;
+    let mut base = tracker_params(args.params.as_deref())?;
+    // The overlays draw the tracker's own `I_t`.
+    base.intensity.always |= args.overlay.is_some();
     let config = method.configure(&base);
     let noise = args
         .init_noise

@@ -247,8 +247,14 @@ impl EventTrack6d {
             results: Vec::with_capacity(places),
             probes,
         };
+        // `I_t` is reconstructed only where something reads it: the event term needs the latest times alone.
+        let surface = if config.intensity.always || config.intensity_term.weight > 0.0 {
+            EventSurface::new(cam.width, cam.height, config.intensity)
+        } else {
+            EventSurface::latest_times_only(cam.width, cam.height)
+        };
         Ok(Self {
-            surface: EventSurface::new(cam.width, cam.height, config.intensity),
+            surface,
             depth: DepthFrame {
                 index: 0,
                 width: depth_cam.width,
@@ -283,7 +289,8 @@ impl EventTrack6d {
         &self.config
     }
 
-    /// The event state (reconstructed intensity and time surface).
+    /// The event state: time surface, and reconstructed intensity if `intensity.always` is set or the intensity
+    /// term's weight is positive.
     pub fn event_surface(&self) -> &EventSurface {
         &self.surface
     }
