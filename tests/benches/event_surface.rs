@@ -1,6 +1,7 @@
-//! Integrating a recorded event stream into the tracker's full-sensor [`EventSurface`] (latest time and log
-//! intensity per pixel). The real-time runtime does this for every event on the tracker thread, outside the timed
-//! tick of the `tick` bench; the input is the same generated mug shake (`tests/src/tick_fixture.rs`).
+//! Integrating a recorded event stream into the tracker's full-sensor [`EventSurface`]: latest time and log
+//! intensity per pixel, and latest time only (what the tracker keeps at its defaults, where nothing reads `I_t`).
+//! The real-time runtime does this for every event on the tracker thread, outside the timed tick of the `tick`
+//! bench; the input is the same generated mug shake (`tests/src/tick_fixture.rs`).
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use drivers::event::EventBuffer;
@@ -27,6 +28,14 @@ fn integrate(c: &mut Criterion) {
     group.bench_function("integrate_mug_shake_0_5s", |b| {
         b.iter_batched_ref(
             || fresh.clone(),
+            |surface| surface.integrate(&events),
+            BatchSize::LargeInput,
+        )
+    });
+    let times_only = EventSurface::latest_times_only(cam.width, cam.height);
+    group.bench_function("integrate_times_only_mug_shake_0_5s", |b| {
+        b.iter_batched_ref(
+            || times_only.clone(),
             |surface| surface.integrate(&events),
             BatchSize::LargeInput,
         )
