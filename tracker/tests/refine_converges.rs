@@ -494,3 +494,37 @@ fn contrast_maximisation_recovers_the_velocity_of_a_moving_outline() {
         "velocity {found:?}, expected ({speed}, 0, 0)"
     );
 }
+
+#[test]
+fn depth_stats_count_what_the_accumulation_counts() {
+    let mut renderer = CpuRenderer::new();
+    let id = renderer.add_mesh(Arc::new(common::cube(0.1))).unwrap();
+    let mut measured = RenderTarget::new();
+    let (_, roi_cam) = render_roi_at(&mut renderer, id, &truth(), &mut measured);
+    let depth = DepthImage {
+        width: roi_cam.width,
+        height: roi_cam.height,
+        z: measured.depth().to_vec(),
+    };
+    let term = DepthTerm::default();
+    let mut view = ModelView::with_capacity(600, 200);
+    // At the truth, 4 mm off (some residuals beyond two sigma) and 4 cm behind the measurement (occluded).
+    for (shift, expect_occluded) in [(0.0, false), (0.004, false), (0.04, true)] {
+        let pose = Translation3::new(0.0, 0.0, shift) * truth();
+        let mut target = RenderTarget::new();
+        render_roi_at(&mut renderer, id, &pose, &mut target);
+        view.extract(&target, &roi_cam, 1, &pose, 600, 200);
+        let mut ne = NormalEquations::default();
+        let accumulated =
+            term.accumulate(&view, &pose, &Vector3::zeros(), &roi_cam, &depth, &mut ne);
+        let counted = term.stats(&view, &pose, &roi_cam, &depth);
+        assert_eq!(counted, accumulated, "shift {shift}");
+        assert!(counted.points > 100, "{counted:?}");
+        assert_eq!(
+            counted.occluded > counted.points / 2,
+            expect_occluded,
+            "{counted:?}"
+        );
+        assert!(ne.count <= counted.measured, "{counted:?} {}", ne.count);
+    }
+}

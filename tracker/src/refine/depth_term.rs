@@ -56,6 +56,29 @@ impl DepthTerm {
         depth: &DepthImage,
         ne: &mut NormalEquations,
     ) -> DepthTermStats {
+        self.evaluate(view, pose, center_obj, camera, depth, Some(ne))
+    }
+
+    /// The counts [`Self::accumulate`] returns for `view` at `pose`, without building the equations.
+    pub fn stats(
+        &self,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        camera: &PinholeCamera,
+        depth: &DepthImage,
+    ) -> DepthTermStats {
+        self.evaluate(view, pose, &Vector3::zeros(), camera, depth, None)
+    }
+
+    fn evaluate(
+        &self,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        center_obj: &Vector3<f64>,
+        camera: &PinholeCamera,
+        depth: &DepthImage,
+        mut ne: Option<&mut NormalEquations>,
+    ) -> DepthTermStats {
         let mut stats = DepthTermStats {
             points: view.surface.len(),
             ..DepthTermStats::default()
@@ -87,6 +110,9 @@ impl DepthTerm {
             if r.abs() < 2.0 * sigma {
                 stats.inliers += 1;
             }
+            let Some(ne) = ne.as_deref_mut() else {
+                continue;
+            };
             // Huber weight at 1.5 sigma.
             let k = 1.5 * sigma;
             let robust = if r.abs() <= k { 1.0 } else { k / r.abs() };

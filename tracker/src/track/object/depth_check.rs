@@ -17,15 +17,9 @@ impl ObjectTrack {
         roi_camera: &PinholeCamera,
         config: &TrackerConfig,
     ) -> DepthTermStats {
-        let mut scratch = NormalEquations::default();
-        config.depth_term.accumulate(
-            &self.view,
-            pose,
-            &self.center_obj,
-            roi_camera,
-            &self.depth_now,
-            &mut scratch,
-        )
+        config
+            .depth_term
+            .stats(&self.view, pose, roi_camera, &self.depth_now)
     }
 
     /// At a fresh depth frame, keeps the previous frame's surfaces around the object that moved since (the carried
