@@ -20,9 +20,12 @@ use crate::geometry::PinholeCamera;
 use nalgebra::{Isometry3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
 
 /// Accumulated weighted least-squares normal equations `H xi = -g` of one iteration.
+///
+/// `H` is symmetric, so only its upper triangle (row <= column) is accumulated; [`Self::hessian`] gives the whole
+/// matrix.
 #[derive(Debug, Clone, Copy)]
 pub struct NormalEquations {
-    /// `sum w J J^T`.
+    /// Upper triangle (row <= column) of `sum w J J^T`; the entries below the diagonal stay zero.
     pub h: Matrix6<f64>,
     /// `sum w J r`.
     pub g: Vector6<f64>,
@@ -50,12 +53,9 @@ impl NormalEquations {
         let rot = p_minus_c.cross(grad);
         let j = [grad.x, grad.y, grad.z, rot.x, rot.y, rot.z];
         let wj = j.map(|x| w * x);
-        // Column by column, each entry gets exactly `(w j_r) j_c`: the same sums as `(w j) j^T` without the
-        // temporary matrix.
-        for (c, column) in self.h.column_iter_mut().enumerate() {
-            let jc = j[c];
-            for (h, wjr) in column.into_iter().zip(wj) {
-                *h += wjr * jc;
+        for (c, jc) in j.into_iter().enumerate() {
+            for (r, wjr) in wj.into_iter().enumerate().take(c + 1) {
+                self.h[(r, c)] += wjr * jc;
             }
         }
         let wr = w * r;
@@ -64,6 +64,17 @@ impl NormalEquations {
         }
         self.cost += w * r * r;
         self.count += 1;
+    }
+
+    /// The whole symmetric `sum w J J^T`: the accumulated upper triangle mirrored below the diagonal.
+    pub fn hessian(&self) -> Matrix6<f64> {
+        let mut h = self.h;
+        for c in 0..6 {
+            for r in c + 1..6 {
+                h[(r, c)] = h[(c, r)];
+            }
+        }
+        h
     }
 
     /// Adds another set of equations scaled by `weight`.
@@ -90,7 +101,7 @@ pub fn solve_step(ne: &NormalEquations, lambda: f64, bounds: &StepBounds) -> Opt
     if ne.count < 6 {
         return None;
     }
-    let mut a = ne.h;
+    let mut a = ne.hessian();
     let scale = (0..6).map(|i| a[(i, i)]).fold(0.0f64, f64::max).max(1e-12);
     for i in 0..6 {
         a[(i, i)] += lambda * a[(i, i)] + 1e-6 * scale;
@@ -211,6 +222,31 @@ mod tests {
         let c1 = new * nalgebra::Point3::from(center);
         assert!((c1 - c0 - Vector3::new(0.01, 0.0, 0.0)).norm() < 1e-12);
         assert!((new.rotation.angle() - 0.3).abs() < 1e-12);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn hessian_is_the_whole_weighted_sum_of_jacobian_products(
+            points in proptest::collection::vec(
+                (proptest::array::uniform3(-1.0f64..1.0), proptest::array::uniform3(-0.2f64..0.2), 0.01f64..10.0),
+                1..40,
+            ),
+        ) {
+            let mut ne = NormalEquations::default();
+            let mut full = Matrix6::zeros();
+            for (grad, arm, w) in &points {
+                let grad = Vector3::from(*grad);
+                let arm = Vector3::from(*arm);
+                ne.add_point(&grad, &arm, 0.5, *w);
+                let rot = arm.cross(&grad);
+                let j = Vector6::new(grad.x, grad.y, grad.z, rot.x, rot.y, rot.z);
+                full += j * j.transpose() * *w;
+            }
+            let h = ne.hessian();
+            proptest::prop_assert_eq!(h, h.transpose());
+            proptest::prop_assert!((h - full).abs().max() <= 1e-12 * full.abs().max().max(1.0));
+            proptest::prop_assert_eq!(ne.count, points.len());
+        }
     }
 
     #[test]
