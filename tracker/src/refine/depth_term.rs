@@ -56,7 +56,7 @@ impl DepthTerm {
         depth: &DepthImage,
         ne: &mut NormalEquations,
     ) -> DepthTermStats {
-        self.evaluate(view, pose, center_obj, camera, depth, Some(ne))
+        self.evaluate(view, pose, camera, depth, Some((center_obj, ne)))
     }
 
     /// The counts [`Self::accumulate`] returns for `view` at `pose`, without building the equations.
@@ -67,23 +67,24 @@ impl DepthTerm {
         camera: &PinholeCamera,
         depth: &DepthImage,
     ) -> DepthTermStats {
-        self.evaluate(view, pose, &Vector3::zeros(), camera, depth, None)
+        self.evaluate(view, pose, camera, depth, None)
     }
 
+    /// The counts, and with `equations` (the increment's centre, object frame, and where to add) the residuals.
     fn evaluate(
         &self,
         view: &ModelView,
         pose: &Isometry3<f64>,
-        center_obj: &Vector3<f64>,
         camera: &PinholeCamera,
         depth: &DepthImage,
-        mut ne: Option<&mut NormalEquations>,
+        equations: Option<(&Vector3<f64>, &mut NormalEquations)>,
     ) -> DepthTermStats {
         let mut stats = DepthTermStats {
             points: view.surface.len(),
             ..DepthTermStats::default()
         };
-        let c = pose * nalgebra::Point3::from(*center_obj);
+        let mut equations =
+            equations.map(|(center, ne)| (pose * nalgebra::Point3::from(*center), ne));
         // One rotation matrix per evaluation: cheaper per point than rotating by the quaternion twice.
         let rotation = pose.rotation.to_rotation_matrix();
         let rotation = rotation.matrix();
@@ -120,13 +121,13 @@ impl DepthTerm {
             if r.abs() < 2.0 * sigma {
                 stats.inliers += 1;
             }
-            let Some(ne) = ne.as_deref_mut() else {
+            let Some((c, ne)) = equations.as_mut() else {
                 continue;
             };
             // Huber weight at 1.5 sigma.
             let k = 1.5 * sigma;
             let robust = if r.abs() <= k { 1.0 } else { k / r.abs() };
-            ne.add_point(&(-n), &(p - c), r, robust / (sigma * sigma));
+            ne.add_point(&(-n), &(p - *c), r, robust / (sigma * sigma));
         }
         stats
     }
