@@ -1,10 +1,12 @@
-//! Meshes uploaded once, at registration: a non-indexed vertex buffer (so flat-shaded meshes carry their face normal
-//! per vertex and each triangle its material), a material table and the luminance texels of all textures.
+//! Meshes uploaded once, at registration: an indexed vertex buffer (one vertex per distinct mesh vertex and material;
+//! flat-shaded meshes, without vertex normals, get one vertex per triangle corner carrying the face normal), a
+//! material table and the luminance texels of all textures.
 
 use super::super::RenderError;
 use super::super::cpu::prepared::{back_face_cull_sign, luminance};
 use crate::mesh::Mesh;
 use glam::Vec3A;
+use std::collections::HashMap;
 use std::sync::Arc;
 
 /// Bytes of one vertex: position (3 x f32), normal (3 x f32), uv (2 x f32), material (u32).
@@ -21,7 +23,9 @@ pub(super) struct GpuMesh {
     /// Keeps the source mesh alive (and identifies it).
     _mesh: Arc<Mesh>,
     pub(super) vertices: wgpu::Buffer,
-    pub(super) vertex_count: u32,
+    /// The triangle list, three `u32` indices into `vertices` per triangle.
+    pub(super) indices: wgpu::Buffer,
+    pub(super) index_count: u32,
     /// Materials and texels (group 1).
     pub(super) bind_group: wgpu::BindGroup,
     /// Back faces to skip for closed, consistently wound meshes: 1 = positive image-space area (x right, y down),
@@ -64,26 +68,49 @@ fn materials_and_texels(mesh: &Mesh) -> (Vec<u8>, Vec<u8>) {
     (table, texels)
 }
 
-/// Expands the indexed mesh into one vertex per triangle corner.
-fn vertex_bytes(mesh: &Mesh) -> Vec<u8> {
+/// The device's vertices and the triangle list's indices into them.
+///
+/// A vertex is shared by the triangles that use the same mesh vertex with the same material, so the device's vertex
+/// stage runs about once per mesh vertex rather than once per triangle corner; a mesh without vertex normals shades
+/// each triangle flat, so its corners are not shared.
+fn vertices_and_indices(mesh: &Mesh) -> (Vec<u8>, Vec<u32>) {
     let positions = mesh.positions();
-    let mut out = Vec::with_capacity(mesh.triangles().len() * 3 * VERTEX_BYTES as usize);
-    for (tri, &material) in mesh.triangles().iter().zip(mesh.triangle_materials()) {
-        let corners = tri.map(|i| positions[i as usize].coords);
-        let face = (corners[1] - corners[0]).cross(&(corners[2] - corners[0]));
-        let face = face
-            .try_normalize(0.0)
-            .unwrap_or_else(nalgebra::Vector3::zeros);
-        for &i in tri {
-            let i = i as usize;
-            let p = positions[i];
-            let n = mesh.normals().map_or(face, |n| n[i]);
-            let uv = mesh.uvs().map_or([0.0; 2], |t| t[i]);
-            push_f32s(&mut out, &[p.x, p.y, p.z, n.x, n.y, n.z, uv[0], uv[1]]);
-            out.extend_from_slice(&material.to_le_bytes());
+    let triangles = mesh.triangles();
+    let mut bytes = Vec::with_capacity(positions.len() * VERTEX_BYTES as usize);
+    let mut indices = Vec::with_capacity(triangles.len() * 3);
+    let mut shared: HashMap<(u32, u32), u32> = HashMap::with_capacity(positions.len());
+    let mut count = 0u32;
+    let mut push = |bytes: &mut Vec<u8>, i: usize, n: &nalgebra::Vector3<f32>, material: u32| {
+        let p = positions[i];
+        let uv = mesh.uvs().map_or([0.0; 2], |t| t[i]);
+        push_f32s(bytes, &[p.x, p.y, p.z, n.x, n.y, n.z, uv[0], uv[1]]);
+        bytes.extend_from_slice(&material.to_le_bytes());
+        count += 1;
+        count - 1
+    };
+    for (tri, &material) in triangles.iter().zip(mesh.triangle_materials()) {
+        match mesh.normals() {
+            Some(normals) => {
+                for &i in tri {
+                    let index = *shared.entry((i, material)).or_insert_with(|| {
+                        push(&mut bytes, i as usize, &normals[i as usize], material)
+                    });
+                    indices.push(index);
+                }
+            }
+            None => {
+                let corners = tri.map(|i| positions[i as usize].coords);
+                let face = (corners[1] - corners[0]).cross(&(corners[2] - corners[0]));
+                let face = face
+                    .try_normalize(0.0)
+                    .unwrap_or_else(nalgebra::Vector3::zeros);
+                for &i in tri {
+                    indices.push(push(&mut bytes, i as usize, &face, material));
+                }
+            }
         }
     }
-    out
+    (bytes, indices)
 }
 
 fn buffer_with(
@@ -114,7 +141,7 @@ impl GpuMesh {
         layout: &wgpu::BindGroupLayout,
         mesh: Arc<Mesh>,
     ) -> Result<Self, RenderError> {
-        let vertices = vertex_bytes(&mesh);
+        let (vertices, indices) = vertices_and_indices(&mesh);
         let (table, texels) = materials_and_texels(&mesh);
         let too_big = |what: &str, bytes: usize, limit: u64| {
             RenderError::Backend(format!(
@@ -131,8 +158,16 @@ impl GpuMesh {
         if vertices.len() as u64 > limits.max_buffer_size {
             return Err(too_big("vertices", vertices.len(), limits.max_buffer_size));
         }
-        let vertex_count = u32::try_from(mesh.triangles().len() * 3)
-            .map_err(|_| too_big("vertices", vertices.len(), u64::from(u32::MAX)))?;
+        let index_bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        if index_bytes.len() as u64 > limits.max_buffer_size {
+            return Err(too_big(
+                "indices",
+                index_bytes.len(),
+                limits.max_buffer_size,
+            ));
+        }
+        let index_count = u32::try_from(indices.len())
+            .map_err(|_| too_big("indices", index_bytes.len(), u64::from(u32::MAX)))?;
         let positions: Vec<Vec3A> = mesh
             .positions()
             .iter()
@@ -157,12 +192,93 @@ impl GpuMesh {
             ],
         });
         let vertices = buffer_with(device, "vertices", wgpu::BufferUsages::VERTEX, &vertices);
+        let indices = buffer_with(device, "indices", wgpu::BufferUsages::INDEX, &index_bytes);
         Ok(Self {
             _mesh: mesh,
             vertices,
-            vertex_count,
+            indices,
+            index_count,
             bind_group,
             cull,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{Material, MeshParts};
+    use nalgebra::{Point3, Vector3};
+
+    /// Position, normal, uv and material of device vertex `index`.
+    fn vertex(bytes: &[u8], index: u32) -> ([f32; 8], u32) {
+        let start = index as usize * VERTEX_BYTES as usize;
+        let word = |k: usize| {
+            let b = &bytes[start + 4 * k..start + 4 * k + 4];
+            [b[0], b[1], b[2], b[3]]
+        };
+        let floats = std::array::from_fn(|k| f32::from_le_bytes(word(k)));
+        (floats, u32::from_le_bytes(word(8)))
+    }
+
+    /// A square of two triangles sharing an edge, on two materials, with or without vertex normals.
+    fn square(normals: bool) -> Mesh {
+        let parts = MeshParts {
+            positions: vec![
+                Point3::new(0.0, 0.0, 0.0),
+                Point3::new(1.0, 0.0, 0.0),
+                Point3::new(1.0, 1.0, 0.0),
+                Point3::new(0.0, 1.0, 0.2),
+            ],
+            normals: if normals {
+                vec![Vector3::z(), Vector3::z(), Vector3::x(), Vector3::y()]
+            } else {
+                Vec::new()
+            },
+            uvs: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+            triangles: vec![[0, 1, 2], [0, 2, 3], [2, 1, 3]],
+            triangle_materials: vec![0, 0, 1],
+            materials: vec![Material::default(), Material::default()],
+        };
+        Mesh::new("square", parts).expect("valid mesh")
+    }
+
+    #[test]
+    fn every_corner_carries_its_mesh_vertex_and_triangle_material() {
+        for with_normals in [true, false] {
+            let mesh = square(with_normals);
+            let (bytes, indices) = vertices_and_indices(&mesh);
+            assert_eq!(indices.len(), mesh.triangles().len() * 3);
+            let corners = mesh.triangles().iter().zip(mesh.triangle_materials());
+            for (k, (tri, &material)) in corners.enumerate() {
+                for (c, &i) in tri.iter().enumerate() {
+                    let (v, m) = vertex(&bytes, indices[3 * k + c]);
+                    let p = mesh.positions()[i as usize];
+                    let uv = mesh.uvs().expect("uvs")[i as usize];
+                    assert_eq!([v[0], v[1], v[2]], [p.x, p.y, p.z]);
+                    assert_eq!([v[6], v[7]], uv);
+                    assert_eq!(m, material);
+                    if let Some(normals) = mesh.normals() {
+                        let n = normals[i as usize];
+                        assert_eq!([v[3], v[4], v[5]], [n.x, n.y, n.z]);
+                    }
+                }
+            }
+            let count = bytes.len() / VERTEX_BYTES as usize;
+            if with_normals {
+                // Vertices 0 and 2 are shared by the first two triangles; the third triangle's material differs.
+                assert_eq!(count, 4 + 3);
+            } else {
+                // Flat: each corner its own vertex with its triangle's face normal.
+                assert_eq!(count, 9);
+                for k in 0..3 {
+                    let face = [0, 1, 2].map(|c| vertex(&bytes, indices[3 * k + c]).0);
+                    for f in &face {
+                        assert_eq!([f[3], f[4], f[5]], [face[0][3], face[0][4], face[0][5]]);
+                    }
+                    assert!((face[0][3].hypot(face[0][4]).hypot(face[0][5]) - 1.0).abs() < 1e-6);
+                }
+            }
+        }
     }
 }

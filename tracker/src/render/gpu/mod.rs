@@ -277,7 +277,8 @@ impl Renderer for GpuRenderer {
                 pass.set_bind_group(0, &self.uniforms.bind_group, &[offset]);
                 pass.set_bind_group(1, &mesh.bind_group, &[]);
                 pass.set_vertex_buffer(0, mesh.vertices.slice(..));
-                pass.draw(0..mesh.vertex_count, 0..1);
+                pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..mesh.index_count, 0, 0..1);
             }
         }
         let row_bytes = padded_row_bytes(w);
