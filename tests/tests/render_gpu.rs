@@ -251,6 +251,15 @@ fn library_meshes_match_the_cpu_renderer_in_the_roi() {
             let agreement = compare(&a, &b);
             check(&format!("{} {label}", object.name()), &agreement, 500);
             assert!(agreement.labels.contains(&7));
+            // The tracker's render: the geometry-only pipelines (fewer interpolated values).
+            let geometry = scene.geometry_only();
+            let (ga, gb) = render_both(&mut cpu, &mut gpu, &geometry, Some(&roi));
+            check(
+                &format!("{} {label}, geometry only", object.name()),
+                &compare(&ga, &gb),
+                500,
+            );
+            assert!(gb.intensity().iter().all(|&i| i == 0.0));
             worst_depth = worst_depth.max(agreement.max_depth_all);
             worst_mask = worst_mask.min(agreement.interior_mask_fraction());
             worst_normal = worst_normal.max(percentile(&agreement.normal_deg, 0.99));

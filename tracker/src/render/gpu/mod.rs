@@ -273,7 +273,7 @@ impl Renderer for GpuRenderer {
                 let mesh = &self.meshes[inst.mesh];
                 // In range: the buffer holds `capacity` strides and fewer than 65535 instances are drawn.
                 let offset = (i as u64 * self.uniforms.stride) as u32;
-                pass.set_pipeline(self.pipelines.for_cull(inst.cull));
+                pass.set_pipeline(self.pipelines.for_cull(inst.cull, scene.shade_intensity));
                 pass.set_bind_group(0, &self.uniforms.bind_group, &[offset]);
                 pass.set_bind_group(1, &mesh.bind_group, &[]);
                 pass.set_vertex_buffer(0, mesh.vertices.slice(..));

@@ -1,4 +1,5 @@
-//! The shader, bind group layouts and render pipelines (one per back-face culling mode).
+//! The shader, bind group layouts and render pipelines (one per back-face culling mode and shading: full, or
+//! geometry only).
 
 use super::mesh::{VERTEX_ATTRIBUTES, VERTEX_BYTES};
 
@@ -20,12 +21,21 @@ pub(super) struct Pipelines {
     pub(super) frame_layout: wgpu::BindGroupLayout,
     /// Group 1: material table, texels.
     pub(super) mesh_layout: wgpu::BindGroupLayout,
+    /// Depth, normal, mask and shaded intensity.
+    full: CullModes,
+    /// Depth, normal and mask only, with fewer interpolated values (intensity 0).
+    geometry: CullModes,
+}
+
+/// The pipelines of one shader pair, one per back-face culling mode.
+#[derive(Debug)]
+struct CullModes {
     /// Two-sided.
-    pub(super) no_cull: wgpu::RenderPipeline,
+    no_cull: wgpu::RenderPipeline,
     /// Skips triangles of positive image-space area (CPU backend's cull sign 1).
-    pub(super) cull_positive: wgpu::RenderPipeline,
+    cull_positive: wgpu::RenderPipeline,
     /// Skips triangles of negative image-space area (cull sign -1).
-    pub(super) cull_negative: wgpu::RenderPipeline,
+    cull_negative: wgpu::RenderPipeline,
 }
 
 fn uniform_entry(binding: u32, dynamic: bool, size: u64) -> wgpu::BindGroupLayoutEntry {
@@ -76,13 +86,16 @@ impl Pipelines {
             bind_group_layouts: &[Some(&frame_layout), Some(&mesh_layout)],
             immediate_size: 0,
         });
-        let pipeline = |label: &str, front_face: wgpu::FrontFace, cull_mode: Option<wgpu::Face>| {
+        let pipeline = |label: &str,
+                        (vs, fs): (&str, &str),
+                        front_face: wgpu::FrontFace,
+                        cull_mode: Option<wgpu::Face>| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&layout),
                 vertex: wgpu::VertexState {
                     module: &shader,
-                    entry_point: Some("vs_main"),
+                    entry_point: Some(vs),
                     compilation_options: Default::default(),
                     buffers: &[Some(wgpu::VertexBufferLayout {
                         array_stride: VERTEX_BYTES,
@@ -106,7 +119,7 @@ impl Pipelines {
                 multisample: Default::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &shader,
-                    entry_point: Some("fs_main"),
+                    entry_point: Some(fs),
                     compilation_options: Default::default(),
                     targets: &[Some(wgpu::ColorTargetState {
                         format: OUTPUT_FORMAT,
@@ -119,24 +132,41 @@ impl Pipelines {
             })
         };
         // Positive area in y-down pixel coordinates is clockwise in y-up NDC.
-        let no_cull = pipeline("two-sided", wgpu::FrontFace::Ccw, None);
-        let cull_positive = pipeline("cull cw", wgpu::FrontFace::Ccw, Some(wgpu::Face::Back));
-        let cull_negative = pipeline("cull ccw", wgpu::FrontFace::Cw, Some(wgpu::Face::Back));
+        let modes = |shaders: (&str, &str)| CullModes {
+            no_cull: pipeline("two-sided", shaders, wgpu::FrontFace::Ccw, None),
+            cull_positive: pipeline(
+                "cull cw",
+                shaders,
+                wgpu::FrontFace::Ccw,
+                Some(wgpu::Face::Back),
+            ),
+            cull_negative: pipeline(
+                "cull ccw",
+                shaders,
+                wgpu::FrontFace::Cw,
+                Some(wgpu::Face::Back),
+            ),
+        };
         Self {
+            full: modes(("vs_main", "fs_main")),
+            geometry: modes(("vs_geometry", "fs_geometry")),
             frame_layout,
             mesh_layout,
-            no_cull,
-            cull_positive,
-            cull_negative,
         }
     }
 
-    /// The pipeline for a mesh's cull sign (background meshes are always drawn with sign 0).
-    pub(super) fn for_cull(&self, cull: i8) -> &wgpu::RenderPipeline {
+    /// The pipeline for a mesh's cull sign (background meshes are always drawn with sign 0), shading intensity or
+    /// geometry only.
+    pub(super) fn for_cull(&self, cull: i8, shade_intensity: bool) -> &wgpu::RenderPipeline {
+        let modes = if shade_intensity {
+            &self.full
+        } else {
+            &self.geometry
+        };
         match cull {
-            1 => &self.cull_positive,
-            -1 => &self.cull_negative,
-            _ => &self.no_cull,
+            1 => &modes.cull_positive,
+            -1 => &modes.cull_negative,
+            _ => &modes.no_cull,
         }
     }
 }

@@ -60,8 +60,8 @@ fn rotate(v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(instance.row0.xyz, v), dot(instance.row1.xyz, v), dot(instance.row2.xyz, v));
 }
 
-@vertex
-fn vs_main(v: VertexIn) -> VertexOut {
+// The vertex in clip space and the camera frame.
+fn transform(v: VertexIn) -> VertexOut {
     let p = rotate(v.position) + instance.translation.xyz;
     let k = frame.intrinsics;
     let w = frame.size.x;
@@ -77,6 +77,11 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.uv = v.uv;
     out.material = v.material;
     return out;
+}
+
+@vertex
+fn vs_main(v: VertexIn) -> VertexOut {
+    return transform(v);
 }
 
 // Maps a texture coordinate into [0, 1) (repeat), like the CPU backend's `wrap_unit`.
@@ -141,4 +146,41 @@ fn fs_main(f: VertexOut) -> @location(0) vec4<u32> {
     }
     let nz_mask = (pack2x16snorm(vec2<f32>(n.z, 0.0)) & 0xffffu) | (instance.mask.x << 16u);
     return vec4<u32>(bitcast<u32>(f.view.z), bitcast<u32>(intensity), pack2x16snorm(n.xy), nz_mask);
+}
+
+// Geometry only (no intensity): the same depth, normal and mask with fewer interpolated values. The view ray comes
+// from the fragment's pixel and its interpolated depth, which is the same point the full pass interpolates.
+struct GeometryOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) z: f32,
+    @location(1) normal: vec3<f32>,
+}
+
+@vertex
+fn vs_geometry(v: VertexIn) -> GeometryOut {
+    let full = transform(v);
+    var out: GeometryOut;
+    out.clip = full.clip;
+    out.z = full.view.z;
+    out.normal = full.normal;
+    return out;
+}
+
+@fragment
+fn fs_geometry(f: GeometryOut) -> @location(0) vec4<u32> {
+    let k = frame.intrinsics;
+    // Framebuffer position (u + 0.5, v + 0.5) of pixel (u, v).
+    let view = vec3<f32>((f.clip.x - 0.5 - k.z) / k.x, (f.clip.y - 0.5 - k.w) / k.y, 1.0) * f.z;
+    var n = f.normal;
+    let len2 = dot(n, n);
+    if (len2 > 0.0) {
+        n = n * inverseSqrt(len2);
+    } else {
+        n = -normalize(view);
+    }
+    if (dot(n, view) > 0.0) {
+        n = -n;
+    }
+    let nz_mask = (pack2x16snorm(vec2<f32>(n.z, 0.0)) & 0xffffu) | (instance.mask.x << 16u);
+    return vec4<u32>(bitcast<u32>(f.z), 0u, pack2x16snorm(n.xy), nz_mask);
 }
