@@ -2,12 +2,12 @@
 //! renders.
 
 use std::sync::Arc;
-use tracker::geometry::PinholeCamera;
+use tracker::geometry::{PinholeCamera, Roi};
 use tracker::mesh::Mesh;
-use tracker::render::{MeshId, RenderError, RenderTarget, Renderer, Scene};
+use tracker::render::{MeshId, PrefetchCounts, RenderError, RenderTarget, Renderer, Scene};
 
-/// Renders with `inner`, calling the hook first on every render (ROI renders included) and holding what it returns
-/// until that render is done, so a guard's `Drop` runs right after it; forks share the hook.
+/// Renders with `inner`, calling the hook first on every render (ROI renders included; prefetches, which render
+/// nothing the caller sees yet, are passed on without it) and holding what it returns until that render is done, so a guard's `Drop` runs right after it; forks share the hook.
 pub struct HookedRenderer<G = ()> {
     inner: Box<dyn Renderer + Send>,
     hook: Arc<dyn Fn() -> G + Send + Sync>,
@@ -39,6 +39,19 @@ impl<G: 'static> Renderer for HookedRenderer<G> {
     ) -> Result<(), RenderError> {
         let _during = (self.hook)();
         self.inner.render(scene, camera, target)
+    }
+
+    fn prefetch_roi(
+        &mut self,
+        scene: &Scene<'_>,
+        camera: &PinholeCamera,
+        roi: &Roi,
+    ) -> Result<bool, RenderError> {
+        self.inner.prefetch_roi(scene, camera, roi)
+    }
+
+    fn prefetch_counts(&self) -> PrefetchCounts {
+        self.inner.prefetch_counts()
     }
 
     fn fork(&self) -> Option<Box<dyn Renderer + Send>> {

@@ -1,5 +1,6 @@
 //! The wgpu renderer against the CPU renderer on the 12 library meshes (several poses, 160x160 ROI), on a scene of
-//! mutually occluding objects in front of a background mesh (full frame and ROI), and on invalid input.
+//! mutually occluding objects in front of a background mesh (full frame and ROI), and on invalid input; and its
+//! prefetched renders, taken only by the identical request.
 //!
 //! Needs a Vulkan adapter: on a machine without a GPU, Mesa's lavapipe (`apt-get install mesa-vulkan-drivers`, which
 //! `.ci/setup` does). Without one these tests fail; they never pass silently.
@@ -10,8 +11,8 @@ use std::sync::Arc;
 use tracker::geometry::{PinholeCamera, Roi};
 use tracker::mesh::{Material, Mesh, MeshParts, Texture};
 use tracker::render::{
-    BackgroundMesh, CpuRenderer, GpuRenderer, MASK_BACKGROUND, MASK_EMPTY, MeshId, RenderError,
-    RenderTarget, Renderer, RendererKind, Scene, SceneObject, create_renderer,
+    BackgroundMesh, CpuRenderer, GpuRenderer, MASK_BACKGROUND, MASK_EMPTY, MeshId, PrefetchCounts,
+    RenderError, RenderTarget, Renderer, RendererKind, Scene, SceneObject, create_renderer,
 };
 
 fn gpu_renderer() -> GpuRenderer {
@@ -479,4 +480,157 @@ fn gpu_renderer_reports_the_same_input_errors_and_is_selectable() {
         .expect("render thread")
         .expect("render on another thread");
     assert!(t.mask().iter().filter(|&&m| m == 4).count() > 1000);
+}
+
+/// The images of `a` and `b` are bit-identical (depth, normals, mask, intensity, camera).
+fn assert_same_image(a: &RenderTarget, b: &RenderTarget, what: &str) {
+    assert_eq!(a.camera(), b.camera(), "{what}: camera");
+    assert_eq!(a.mask(), b.mask(), "{what}: mask");
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(a.depth()), bits(b.depth()), "{what}: depth");
+    assert_eq!(
+        bits(a.intensity()),
+        bits(b.intensity()),
+        "{what}: intensity"
+    );
+    let normals = |t: &RenderTarget| bits(&t.normals().concat());
+    assert_eq!(normals(a), normals(b), "{what}: normals");
+}
+
+#[test]
+fn a_prefetched_render_is_taken_only_by_the_identical_request() {
+    let mut gpu = gpu_renderer();
+    let mug = Arc::new(
+        generate(ObjectKind::Mug, 3)
+            .to_mesh()
+            .expect("library mesh"),
+    );
+    let id = gpu.add_mesh(mug.clone()).expect("GPU registers");
+    let cam = camera();
+    let at = |p: Isometry3<f64>| {
+        [SceneObject {
+            mesh: id,
+            pose: p,
+            id: 4,
+        }]
+    };
+    let (p0, p1) = (
+        pose([0.01, 0.0, 0.5], [0.4, -0.3, 0.2]),
+        pose([0.03, -0.01, 0.55], [0.2, 0.5, -0.4]),
+    );
+    let roi_of = |p: &Isometry3<f64>| {
+        Roi::around_object(&cam, &(p * Point3::origin()), mug.diameter(), 1.2, 160).expect("roi")
+    };
+    let direct = |gpu: &mut GpuRenderer, p: Isometry3<f64>| {
+        let objects = at(p);
+        let mut t = RenderTarget::new();
+        gpu.render_roi(
+            &Scene::objects(&objects).geometry_only(),
+            &cam,
+            &roi_of(&p),
+            &mut t,
+        )
+        .expect("render");
+        t
+    };
+    let expected0 = direct(&mut gpu, p0);
+    let expected1 = direct(&mut gpu, p1);
+    assert_eq!(gpu.prefetch_counts(), PrefetchCounts::default());
+
+    // Prefetched, then requested identically: taken, and the same image as rendering on request.
+    let objects = at(p0);
+    let scene = Scene::objects(&objects).geometry_only();
+    assert!(
+        gpu.prefetch_roi(&scene, &cam, &roi_of(&p0))
+            .expect("prefetch")
+    );
+    let mut taken = RenderTarget::new();
+    gpu.render_roi(&scene, &cam, &roi_of(&p0), &mut taken)
+        .expect("render");
+    assert_same_image(&taken, &expected0, "prefetched image");
+    assert_eq!(
+        gpu.prefetch_counts(),
+        PrefetchCounts {
+            started: 1,
+            used: 1
+        }
+    );
+
+    // Prefetched at one pose, requested at another: rendered again, the prefetch is not taken.
+    assert!(
+        gpu.prefetch_roi(&scene, &cam, &roi_of(&p0))
+            .expect("prefetch")
+    );
+    let other = at(p1);
+    let mut fresh = RenderTarget::new();
+    gpu.render_roi(
+        &Scene::objects(&other).geometry_only(),
+        &cam,
+        &roi_of(&p1),
+        &mut fresh,
+    )
+    .expect("render");
+    assert_same_image(&fresh, &expected1, "request that differs from the prefetch");
+    assert_eq!(
+        gpu.prefetch_counts(),
+        PrefetchCounts {
+            started: 2,
+            used: 1
+        }
+    );
+    // Shaded instead of geometry only is another request too.
+    let mut shaded = RenderTarget::new();
+    gpu.render_roi(&Scene::objects(&objects), &cam, &roi_of(&p0), &mut shaded)
+        .expect("render");
+    assert!(shaded.intensity().iter().any(|&i| i > 0.0));
+    assert_eq!(gpu.prefetch_counts().used, 1);
+    // The unused prefetch is still there for its own request.
+    gpu.render_roi(&scene, &cam, &roi_of(&p0), &mut taken)
+        .expect("render");
+    assert_same_image(&taken, &expected0, "prefetch taken after other renders");
+    assert_eq!(
+        gpu.prefetch_counts(),
+        PrefetchCounts {
+            started: 2,
+            used: 2
+        }
+    );
+
+    // Several in flight (one per object of a scene), each taken by its own request, in any order; more than the
+    // slots replaces the oldest without error.
+    let poses: Vec<_> = (0..10)
+        .map(|k| {
+            pose(
+                [0.01 * f64::from(k), 0.0, 0.5],
+                [0.1 * f64::from(k), 0.2, 0.0],
+            )
+        })
+        .collect();
+    for p in &poses {
+        let objects = at(*p);
+        assert!(
+            gpu.prefetch_roi(&Scene::objects(&objects).geometry_only(), &cam, &roi_of(p))
+                .expect("prefetch")
+        );
+    }
+    for p in poses.iter().rev() {
+        let want = {
+            let mut g = gpu_renderer();
+            assert_eq!(g.add_mesh(mug.clone()).expect("GPU registers"), id);
+            direct(&mut g, *p)
+        };
+        let objects = at(*p);
+        gpu.render_roi(
+            &Scene::objects(&objects).geometry_only(),
+            &cam,
+            &roi_of(p),
+            &mut taken,
+        )
+        .expect("render");
+        assert_same_image(&taken, &want, "one of several prefetches");
+    }
+    let counts = gpu.prefetch_counts();
+    assert_eq!(counts.started, 2 + 10);
+    // The last 8 (the slots) were taken; the first 2 were replaced before their request came.
+    assert_eq!(counts.used, 2 + 8);
 }

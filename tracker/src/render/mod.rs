@@ -132,6 +132,15 @@ pub fn create_renderer(kind: RendererKind) -> Result<Box<dyn Renderer + Send>, R
     }
 }
 
+/// How a renderer's prefetched renders were used ([`Renderer::prefetch_roi`]).
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct PrefetchCounts {
+    /// Renders started ahead of their request.
+    pub started: u64,
+    /// Of them, renders a later request took (the rest were replaced unread: the request differed).
+    pub used: u64,
+}
+
 /// A renderer of posed triangle meshes. Object-safe: the tracker may hold a `Box<dyn Renderer>`.
 pub trait Renderer {
     /// Registers a mesh (for a GPU backend: uploads it) and returns its handle for this renderer.
@@ -155,6 +164,25 @@ pub trait Renderer {
         target: &mut RenderTarget,
     ) -> Result<(), RenderError> {
         self.render(scene, &camera.crop(roi), target)
+    }
+
+    /// Starts rendering the ROI `roi` of `camera` ahead of time (the tracker's next tick at its predicted pose), so a
+    /// later [`Self::render_roi`] of the same scene, camera and ROI takes the finished image instead of rendering
+    /// again; any other render is unaffected. Returns whether a render was started (or is already in flight); the
+    /// default renders only on request and returns `false`. Prefetching never changes what a render returns.
+    fn prefetch_roi(
+        &mut self,
+        scene: &Scene<'_>,
+        camera: &PinholeCamera,
+        roi: &Roi,
+    ) -> Result<bool, RenderError> {
+        let _ = (scene, camera, roi);
+        Ok(false)
+    }
+
+    /// Renders started by [`Self::prefetch_roi`] and taken by a later render, since the renderer was made.
+    fn prefetch_counts(&self) -> PrefetchCounts {
+        PrefetchCounts::default()
     }
 
     /// An independent renderer with the same meshes under the same handles, for another thread; `None` when the

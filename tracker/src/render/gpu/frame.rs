@@ -72,7 +72,7 @@ impl Targets {
     }
 }
 
-/// The frame uniform and the per-instance uniforms, with the CPU-side staging bytes reused between renders.
+/// The frame uniform and the per-instance uniforms (their bytes are staged in a [`super::request::RenderRequest`]).
 #[derive(Debug)]
 pub(super) struct Uniforms {
     pub(super) frame: wgpu::Buffer,
@@ -82,8 +82,6 @@ pub(super) struct Uniforms {
     /// Distance between instances, bytes (the device's uniform offset alignment, at least [`INSTANCE_BYTES`]).
     pub(super) stride: u64,
     pub(super) bind_group: wgpu::BindGroup,
-    /// Staging for the instance uniforms (capacity kept).
-    pub(super) staging: Vec<u8>,
 }
 
 impl Uniforms {
@@ -133,7 +131,6 @@ impl Uniforms {
             capacity,
             stride,
             bind_group,
-            staging: Vec::with_capacity(stride as usize * capacity),
         }
     }
 }

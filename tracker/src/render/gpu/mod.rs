@@ -4,41 +4,39 @@
 //! One render pass draws every instance (objects first, then background, as the CPU backend) into a packed
 //! `Rgba32Uint` target (depth, intensity, snorm16 normal, mask) with a `near / z` depth buffer; the target is copied
 //! into a reused readback buffer, mapped, and unpacked into the caller's [`RenderTarget`]. Textures, buffers and
-//! uniforms are sized to the largest image and the most instances seen and then reused.
+//! uniforms are sized to the largest image and the most instances seen and then reused. A render can be started
+//! ahead of its request ([`Renderer::prefetch_roi`], module `request`).
 
 mod device;
 mod frame;
 mod mesh;
+mod pass;
 mod pipeline;
+mod readback;
+mod request;
 
 use super::{
-    MASK_BACKGROUND, MASK_EMPTY, MAX_PIXELS, MeshId, RenderError, RenderTarget, Renderer, Scene,
+    MASK_BACKGROUND, MASK_EMPTY, MAX_PIXELS, MeshId, PrefetchCounts, RenderError, RenderTarget,
+    Renderer, Scene,
 };
-use crate::geometry::PinholeCamera;
+use crate::geometry::{PinholeCamera, Roi};
 use crate::mesh::Mesh;
 use device::Gpu;
-use frame::{Targets, Uniforms, padded_row_bytes, push_words, unpack};
+use frame::{Targets, Uniforms, padded_row_bytes, push_words};
 use mesh::GpuMesh;
 use nalgebra::Isometry3;
+use pass::{backend, read_back, submit};
 use pipeline::Pipelines;
-use std::sync::{Arc, Mutex};
-
-/// One posed instance of the current render.
-#[derive(Debug, Clone, Copy)]
-struct Instance {
-    mesh: usize,
-    /// Cull sign used for this instance (0 for background meshes, which may surround the camera).
-    cull: i8,
-}
-
-/// Result slot of the readback buffer's map request.
-type MapResult = Arc<Mutex<Option<Result<(), wgpu::BufferAsyncError>>>>;
+use readback::{UnpackJob, Unpacker};
+use request::{Instance, MapResult, PREFETCH_SLOTS, PrefetchSlot, RenderRequest};
+use std::sync::Arc;
 
 /// A renderer on `wgpu` over Vulkan: depth, normals, object mask and shaded intensity, matching [`CpuRenderer`]
 /// (depth to float precision, masks except on a few silhouette pixels, normals to 16-bit precision).
 ///
 /// Each render waits for the device and reads the image back (16 bytes per pixel), so a render costs a round trip
-/// to the device on top of the rasterisation. `Send`: it can live on the tracker's thread.
+/// to the device on top of the rasterisation, unless it was prefetched: then the device rasterised it while the
+/// caller did other work. `Send`: it can live on the tracker's thread.
 ///
 /// [`CpuRenderer`]: super::CpuRenderer
 #[derive(Debug)]
@@ -48,8 +46,16 @@ pub struct GpuRenderer {
     meshes: Vec<GpuMesh>,
     targets: Option<Targets>,
     uniforms: Uniforms,
-    instances: Vec<Instance>,
+    /// The request being rendered or prefetched.
+    request: RenderRequest,
     mapped: MapResult,
+    /// Renders started ahead of their request (at most [`PREFETCH_SLOTS`]).
+    prefetched: Vec<PrefetchSlot>,
+    /// The slot the next prefetch replaces when all are taken.
+    next_slot: usize,
+    /// The thread that unpacks prefetched renders (started by the first prefetch).
+    unpacker: Option<Unpacker>,
+    counts: PrefetchCounts,
 }
 
 const _: () = {
@@ -85,8 +91,12 @@ impl GpuRenderer {
             meshes: Vec::new(),
             targets: None,
             uniforms,
-            instances: Vec::new(),
+            request: RenderRequest::default(),
             mapped: MapResult::default(),
+            prefetched: Vec::new(),
+            next_slot: 0,
+            unpacker: None,
+            counts: PrefetchCounts::default(),
         })
     }
 
@@ -95,7 +105,7 @@ impl GpuRenderer {
         &self.gpu.description
     }
 
-    /// Validates the scene, fills `self.instances` and stages the instance uniforms (objects, then background).
+    /// Validates the scene, fills the request's draws and stages the instance uniforms (objects, then background).
     fn stage_instances(&mut self, scene: &Scene<'_>) -> Result<(), RenderError> {
         let total = scene.objects.len() + scene.background.len();
         if total >= usize::from(u16::MAX) {
@@ -109,8 +119,8 @@ impl GpuRenderer {
                 total.next_power_of_two(),
             );
         }
-        self.instances.clear();
-        let staging = &mut self.uniforms.staging;
+        self.request.draws.clear();
+        let staging = &mut self.request.instances;
         staging.clear();
         let objects = scene.objects.iter().enumerate();
         let items = objects
@@ -142,14 +152,14 @@ impl GpuRenderer {
                 r[(2, 0)], r[(2, 1)], r[(2, 2)], 0.0,
                 t.x, t.y, t.z, 0.0,
             ];
-            let start = self.instances.len() * self.uniforms.stride as usize;
+            let start = self.request.draws.len() * self.uniforms.stride as usize;
             staging.resize(start, 0);
             staging.extend(f32_bits(&values).flat_map(u32::to_le_bytes));
             push_words(
                 staging,
                 &[u32::from(id.unwrap_or(MASK_BACKGROUND)), 0, 0, 0],
             );
-            self.instances.push(Instance {
+            self.request.draws.push(Instance {
                 mesh: mesh_index,
                 cull: if id.is_some() { gpu_mesh.cull } else { 0 },
             });
@@ -157,11 +167,11 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Stages the frame uniform: intrinsics, image size, near plane, lighting, whether to shade intensity.
-    fn write_frame(&self, scene: &Scene<'_>, camera: &PinholeCamera) {
+    /// Stages the frame uniform in the request: intrinsics, image size, near plane, lighting, whether to shade
+    /// intensity.
+    fn stage_frame(&mut self, scene: &Scene<'_>, camera: &PinholeCamera) {
         let l = &scene.lighting;
         let light = l.direction.try_normalize(0.0).unwrap_or_default();
-        let mut bytes = [0u8; pipeline::FRAME_BYTES as usize];
         let values = [
             camera.fx,
             camera.fy,
@@ -180,15 +190,26 @@ impl GpuRenderer {
             0.0,
             0.0,
         ];
-        for (chunk, bits) in bytes.chunks_exact_mut(4).zip(f32_bits(&values)) {
-            chunk.copy_from_slice(&bits.to_le_bytes());
+        let request = &mut self.request;
+        request.frame.clear();
+        request
+            .frame
+            .extend(f32_bits(&values).flat_map(u32::to_le_bytes));
+        debug_assert_eq!(request.frame.len() as u64, pipeline::FRAME_BYTES);
+        request.camera = Some(*camera);
+        request.shade_intensity = scene.shade_intensity;
+    }
+
+    /// Validates the render of `scene` by `camera` and stages it as the current request.
+    fn stage(&mut self, scene: &Scene<'_>, camera: &PinholeCamera) -> Result<(), RenderError> {
+        camera.validate()?;
+        self.check_size(camera.width, camera.height)?;
+        if !(scene.near.is_finite() && scene.near > 0.0) {
+            return Err(RenderError::InvalidNear(scene.near));
         }
-        self.gpu.queue.write_buffer(&self.uniforms.frame, 0, &bytes);
-        if !self.uniforms.staging.is_empty() {
-            self.gpu
-                .queue
-                .write_buffer(&self.uniforms.instances, 0, &self.uniforms.staging);
-        }
+        self.stage_instances(scene)?;
+        self.stage_frame(scene, camera);
+        Ok(())
     }
 
     /// Checks the image size against the renderer's and the device's limits.
@@ -225,13 +246,21 @@ impl Renderer for GpuRenderer {
         camera: &PinholeCamera,
         target: &mut RenderTarget,
     ) -> Result<(), RenderError> {
-        camera.validate()?;
-        let (w, h) = (camera.width, camera.height);
-        self.check_size(w, h)?;
-        if !(scene.near.is_finite() && scene.near > 0.0) {
-            return Err(RenderError::InvalidNear(scene.near));
+        self.stage(scene, camera)?;
+        let request = &self.request;
+        if let Some(slot) = self
+            .prefetched
+            .iter_mut()
+            .find(|s| s.holds_render && s.request == *request)
+        {
+            slot.holds_render = false;
+            self.counts.used += 1;
+            let taken = slot.unpacked.take(target);
+            return taken
+                .map_err(|e| backend(&self.gpu, e))
+                .and_then(|()| self.gpu.take_error());
         }
-        self.stage_instances(scene)?;
+        let (w, h) = request.size();
         let targets = match self.targets.take() {
             Some(t) if t.fits(w, h) => t,
             old => {
@@ -239,99 +268,104 @@ impl Renderer for GpuRenderer {
                 Targets::new(&self.gpu.device, w.max(ow), h.max(oh))
             }
         };
-        self.write_frame(scene, camera);
         let targets = &*self.targets.insert(targets);
-        let device = &self.gpu.device;
-        let mut encoder = device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("render"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &targets.output_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &targets.depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(0.0),
-                        store: wgpu::StoreOp::Discard,
-                    }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_viewport(0.0, 0.0, w as f32, h as f32, 0.0, 1.0);
-            pass.set_scissor_rect(0, 0, w, h);
-            for (i, inst) in self.instances.iter().enumerate() {
-                let mesh = &self.meshes[inst.mesh];
-                // In range: the buffer holds `capacity` strides and fewer than 65535 instances are drawn.
-                let offset = (i as u64 * self.uniforms.stride) as u32;
-                pass.set_pipeline(self.pipelines.for_cull(inst.cull, scene.shade_intensity));
-                pass.set_bind_group(0, &self.uniforms.bind_group, &[offset]);
-                pass.set_bind_group(1, &mesh.bind_group, &[]);
-                pass.set_vertex_buffer(0, mesh.vertices.slice(..));
-                pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..mesh.index_count, 0, 0..1);
-            }
-        }
-        let row_bytes = padded_row_bytes(w);
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: &targets.output,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &targets.readback,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row_bytes),
-                    rows_per_image: Some(h),
-                },
-            },
-            wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-        );
-        self.gpu.queue.submit([encoder.finish()]);
-        self.gpu.take_error()?;
-        let slice = targets
-            .readback
-            .slice(..u64::from(row_bytes) * u64::from(h));
-        let mapped = Arc::clone(&self.mapped);
-        slice.map_async(wgpu::MapMode::Read, move |result| {
-            if let Ok(mut slot) = mapped.lock() {
-                *slot = Some(result);
-            }
-        });
-        let polled = device.poll(wgpu::PollType::wait_indefinitely());
-        let map_result = self.mapped.lock().ok().and_then(|mut slot| slot.take());
-        let backend =
-            |what: String| RenderError::Backend(format!("{what} on {}", self.gpu.description));
-        polled.map_err(|e| backend(format!("waiting for the GPU failed: {e}")))?;
-        match map_result {
-            Some(Ok(())) => {}
-            Some(Err(e)) => return Err(backend(format!("reading the image back failed: {e}"))),
-            None => return Err(backend("the image read-back never completed".into())),
-        }
-        target.reset(w, h);
-        target.camera = Some(*camera);
-        let unpacked = slice
-            .get_mapped_range()
-            .map(|view| unpack(&view, row_bytes as usize, target))
-            .map_err(|e| backend(format!("mapping the read-back buffer failed: {e}")));
-        targets.readback.unmap();
-        unpacked?;
+        let submission = submit(
+            &self.gpu,
+            &self.pipelines,
+            &self.meshes,
+            &self.uniforms,
+            request,
+            targets,
+            &self.mapped,
+        )?;
+        read_back(
+            &self.gpu,
+            targets,
+            &self.mapped,
+            Some(submission),
+            request,
+            target,
+        )?;
         self.gpu.take_error()
+    }
+
+    fn prefetch_roi(
+        &mut self,
+        scene: &Scene<'_>,
+        camera: &PinholeCamera,
+        roi: &Roi,
+    ) -> Result<bool, RenderError> {
+        self.stage(scene, &camera.crop(roi))?;
+        let request = &self.request;
+        if self
+            .prefetched
+            .iter()
+            .any(|s| s.holds_render && s.request == *request)
+        {
+            return Ok(true);
+        }
+        let unpacker = match &mut self.unpacker {
+            Some(u) => &*u,
+            empty => match Unpacker::start(PREFETCH_SLOTS) {
+                Ok(u) => &*empty.insert(u),
+                // No thread for it: render on request only.
+                Err(_) => return Ok(false),
+            },
+        };
+        let index = match self.prefetched.iter().position(|s| !s.holds_render) {
+            Some(i) => i,
+            None if self.prefetched.len() < PREFETCH_SLOTS => {
+                self.prefetched.push(PrefetchSlot::default());
+                self.prefetched.len() - 1
+            }
+            None => {
+                let i = self.next_slot % self.prefetched.len();
+                self.next_slot = i + 1;
+                i
+            }
+        };
+        let slot = &mut self.prefetched[index];
+        // A render never taken: let its unpacking finish (it releases the buffer) before the slot is reused.
+        slot.unpacked.settle().map_err(|e| backend(&self.gpu, e))?;
+        slot.holds_render = false;
+        let (w, h) = request.size();
+        let Some(camera) = request.camera else {
+            return Ok(false);
+        };
+        let targets = match slot.targets.take() {
+            Some(t) if t.fits(w, h) => t,
+            _ => Targets::new(&self.gpu.device, w, h),
+        };
+        let targets = &*slot.targets.insert(targets);
+        let submission = submit(
+            &self.gpu,
+            &self.pipelines,
+            &self.meshes,
+            &self.uniforms,
+            request,
+            targets,
+            &slot.mapped,
+        )?;
+        slot.unpacked.begin().map_err(|e| backend(&self.gpu, e))?;
+        let job = UnpackJob {
+            device: self.gpu.device.clone(),
+            readback: targets.readback.clone(),
+            mapped: Arc::clone(&slot.mapped),
+            submission,
+            camera,
+            into: Arc::clone(&slot.unpacked),
+        };
+        if let Err(job) = unpacker.send(job) {
+            // The thread has ended: unpack here, so the slot is still consistent.
+            job.run();
+        }
+        slot.request.assign(request);
+        slot.holds_render = true;
+        self.counts.started += 1;
+        Ok(true)
+    }
+
+    fn prefetch_counts(&self) -> PrefetchCounts {
+        self.counts
     }
 }
