@@ -1,7 +1,8 @@
 //! One full tracker tick (reconstruction + refinement) at a 160x160 ROI on one core, after replaying a generated
 //! mug shake: a plain 120 Hz tick (carried depth + events) and a depth-exposure tick (registration of the new
 //! frame + refinement), with the CPU renderer and the wgpu renderer. The `render_in_*` benches time only the
-//! renderer's calls inside the same ticks, so a tick's cost splits into rendering and everything else.
+//! renderer's calls inside the same ticks, so a tick's cost splits into rendering and everything else. The
+//! `paced/*_at_120hz` benches run the same ticks one tick period apart, as a live stream does.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use eventtrack6d_tests::render_hook::HookedRenderer;
@@ -25,13 +26,14 @@ impl Drop for RenderTimer {
     }
 }
 
-fn bench_tracker(c: &mut Criterion, label: &str, mut s: SteadyTracker) {
+fn bench_tracker(c: &mut Criterion, label: &str, s: &mut SteadyTracker) {
     let mut out = Vec::with_capacity(4);
     let tick = s.last_tick;
     c.bench_function(&format!("tick_{label}_160"), |b| {
         b.iter(|| {
             out.clear();
             s.tracker.tick(&tick, &mut out);
+            s.tracker.prepare_next_tick();
         })
     });
     let mut depth_tick = s.last_tick;
@@ -41,8 +43,78 @@ fn bench_tracker(c: &mut Criterion, label: &str, mut s: SteadyTracker) {
             s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
             out.clear();
             s.tracker.tick(&depth_tick, &mut out);
+            s.tracker.prepare_next_tick();
         })
     });
+}
+
+/// The tick period of the tracker's 120 Hz timeline.
+const TICK_PERIOD: Duration = Duration::from_nanos(8_333_333);
+
+/// The same ticks as [`bench_tracker`] at the pace of a live 120 Hz stream: each tick starts one tick period after
+/// the previous one started, and only the tick call is timed, as the runtime's latency counts it (the runtime
+/// publishes the poses, then calls `prepare_next_tick`, which is not timed here). Between ticks the tracker idles,
+/// so a renderer that prefetches ([`tracker::track::TrackerConfig::prefetch_renders`]) has rendered the next ROI
+/// by then; caches also cool down between ticks, as in the runtime. The back-to-back benches time `tick` and
+/// `prepare_next_tick` together: all of a tick's work, none of it hidden.
+///
+/// With `render_spent_ns` (the counter of a [`timed_tracker`]), each sample is the time spent in the renderer's
+/// calls during those ticks instead (`render_in_` benches).
+fn bench_paced(
+    c: &mut Criterion,
+    label: &str,
+    s: &mut SteadyTracker,
+    render_spent_ns: Option<&AtomicU64>,
+) {
+    let mut group = c.benchmark_group("paced");
+    group
+        .sampling_mode(criterion::SamplingMode::Flat)
+        .sample_size(20)
+        .warm_up_time(Duration::from_millis(50))
+        .measurement_time(Duration::from_secs(4));
+    let mut out = Vec::with_capacity(4);
+    let tick = s.last_tick;
+    let mut depth_tick = s.last_tick;
+    depth_tick.depth_frame = Some(s.depth.index);
+    for depth in [false, true] {
+        let name = format!(
+            "{}{}tick_{label}_160_at_120hz",
+            if render_spent_ns.is_some() {
+                "render_in_"
+            } else {
+                ""
+            },
+            if depth { "depth_" } else { "" }
+        );
+        group.bench_function(name, |b| {
+            b.iter_custom(|iters| {
+                let mut spent = Duration::ZERO;
+                if let Some(r) = render_spent_ns {
+                    r.store(0, Ordering::Relaxed);
+                }
+                let mut next = Instant::now();
+                for _ in 0..iters {
+                    next += TICK_PERIOD;
+                    std::thread::sleep(next.saturating_duration_since(Instant::now()));
+                    if depth {
+                        s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
+                    }
+                    out.clear();
+                    let start = Instant::now();
+                    s.tracker
+                        .tick(if depth { &depth_tick } else { &tick }, &mut out);
+                    spent += start.elapsed();
+                    // After the poses are out, as the runtime does: not part of the tick's latency.
+                    s.tracker.prepare_next_tick();
+                }
+                match render_spent_ns {
+                    Some(r) => Duration::from_nanos(r.load(Ordering::Relaxed)),
+                    None => spent,
+                }
+            })
+        });
+    }
+    group.finish();
 }
 
 /// Times only the renderer's share of the same ticks as [`bench_tracker`]: each sample is the summed wall time of
@@ -56,6 +128,7 @@ fn bench_render_share(c: &mut Criterion, label: &str, mut s: SteadyTracker, spen
             for _ in 0..iters {
                 out.clear();
                 s.tracker.tick(&tick, &mut out);
+                s.tracker.prepare_next_tick();
             }
             Duration::from_nanos(spent_ns.load(Ordering::Relaxed))
         })
@@ -69,6 +142,7 @@ fn bench_render_share(c: &mut Criterion, label: &str, mut s: SteadyTracker, spen
                 s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
                 out.clear();
                 s.tracker.tick(&depth_tick, &mut out);
+                s.tracker.prepare_next_tick();
             }
             Duration::from_nanos(spent_ns.load(Ordering::Relaxed))
         })
@@ -94,23 +168,26 @@ fn ticks(c: &mut Criterion) {
     let dir = std::env::temp_dir().join("eventtrack6d-tick-bench");
     let rec = mug_recording(&dir, 0.5);
     let cpu: Box<dyn Renderer + Send> = Box::new(CpuRenderer::new());
-    bench_tracker(
-        c,
-        "cpu",
-        steady_tracker(rec.clone(), TrackerConfig::default(), cpu),
-    );
-    let (s, spent) = timed_tracker(&rec, Box::new(CpuRenderer::new()));
+    let mut s = steady_tracker(rec.clone(), TrackerConfig::default(), cpu);
+    bench_tracker(c, "cpu", &mut s);
+    bench_paced(c, "cpu", &mut s, None);
+    let (mut s, spent) = timed_tracker(&rec, Box::new(CpuRenderer::new()));
+    bench_paced(c, "cpu", &mut s, Some(&spent));
     bench_render_share(c, "cpu", s, &spent);
     match create_renderer(RendererKind::Gpu) {
         Ok(gpu) => {
-            bench_tracker(
-                c,
-                "gpu",
-                steady_tracker(rec.clone(), TrackerConfig::default(), gpu),
+            let mut s = steady_tracker(rec.clone(), TrackerConfig::default(), gpu);
+            bench_tracker(c, "gpu", &mut s);
+            bench_paced(c, "gpu", &mut s, None);
+            let counts = s.tracker.counters();
+            eprintln!(
+                "gpu ticks: {} renders prefetched, {} used",
+                counts.renders_prefetched, counts.prefetched_renders_used
             );
             match create_renderer(RendererKind::Gpu) {
                 Ok(gpu) => {
-                    let (s, spent) = timed_tracker(&rec, gpu);
+                    let (mut s, spent) = timed_tracker(&rec, gpu);
+                    bench_paced(c, "gpu", &mut s, Some(&spent));
                     bench_render_share(c, "gpu", s, &spent);
                 }
                 Err(e) => eprintln!("gpu render-share bench skipped: {e}"),

@@ -112,13 +112,15 @@ impl std::fmt::Display for Summary {
         if let Some(c) = &self.tracker {
             writeln!(
                 f,
-                "tracker:         {} re-detections ({} places checked, {} dropped), {} depth fallbacks, {} render errors, {} depth frames unused",
+                "tracker:         {} re-detections ({} places checked, {} dropped), {} depth fallbacks, {} render errors, {} depth frames unused, {} renders prefetched ({} used)",
                 c.redetections,
                 c.redetect_places_checked,
                 c.redetect_places_dropped,
                 c.depth_fallbacks,
                 c.render_errors,
-                c.depth_frames_unused
+                c.depth_frames_unused,
+                c.renders_prefetched,
+                c.prefetched_renders_used
             )?;
         }
         if !self.source_stats.anomalies.is_empty() {

@@ -258,6 +258,9 @@ impl Worker {
                 o.t_us = Some(e.t_us);
             }
         }
+        drop(h);
+        // The poses are out: start the next tick's work (its renders) in the time until it arrives.
+        self.tracker.prepare_next_tick();
     }
 }
 

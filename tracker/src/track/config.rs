@@ -187,6 +187,11 @@ pub struct TrackerConfig {
     /// or places checked per tick; only renderers that can fork (the CPU renderer) run in parallel. Poses do not
     /// depend on it.
     pub object_threads: usize,
+    /// At the end of a tick, start rendering each object's next ROI at the pose the next tick will predict (one
+    /// tick period later, no depth frame), so a GPU renderer rasterises between ticks. The next tick takes that
+    /// image only for an identical request, so poses do not depend on it; renderers that render only on request
+    /// (the CPU renderer) ignore it.
+    pub prefetch_renders: bool,
 }
 
 impl Default for TrackerConfig {
@@ -234,6 +239,7 @@ impl Default for TrackerConfig {
             quality: QualityConfig::default(),
             redetect: RedetectConfig::default(),
             object_threads: 0,
+            prefetch_renders: true,
         }
     }
 }

@@ -47,6 +47,10 @@ pub trait PoseTracker: Send {
     fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame);
     /// Estimates every object's pose at `tick` and appends one [`PoseEstimate`] per object to `out`.
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>);
+    /// Work for the next tick that need not delay this tick's poses (EventTrack6D: start its renders,
+    /// [`TrackerConfig::prefetch_renders`]); call it once the tick's poses are published. Skipping it changes no
+    /// pose, only when the work is done.
+    fn prepare_next_tick(&mut self) {}
     /// The pose of object `object` at any time `t_us` (interpolated between ticks, extrapolated at most one tick
     /// period past the last one); `None` before the first tick or for an unknown object.
     fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate>;

@@ -80,6 +80,7 @@ pub fn track_recording(
         tracker.tick(&tick, &mut estimates);
         stats.ticks += 1;
         on_tick(&tick, &estimates, tracker);
+        tracker.prepare_next_tick();
         Ok(())
     };
     let path = recording.dir().join("events.raw");

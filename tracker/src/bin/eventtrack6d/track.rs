@@ -235,6 +235,12 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             counters.redetect_places_dropped
         );
     }
+    if counters.renders_prefetched > 0 {
+        eprintln!(
+            "{} renders started ahead of their tick, {} of them used (the rest rendered again: the tick's ROI or poses differed)",
+            counters.renders_prefetched, counters.prefetched_renders_used
+        );
+    }
     if counters.render_errors > 0 || counters.depth_frames_unused > 0 {
         eprintln!(
             "warning: {} render errors, {} depth frames unused",

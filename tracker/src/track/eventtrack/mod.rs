@@ -97,6 +97,10 @@ pub struct TrackerCounters {
     pub redetect_places_checked: u64,
     /// Re-detection places left unchecked because a newer depth frame replaced the one they were planned on.
     pub redetect_places_dropped: u64,
+    /// Renders started at the end of a tick for the next one ([`TrackerConfig::prefetch_renders`]).
+    pub renders_prefetched: u64,
+    /// Of them, renders the next tick took (the others were rendered again: its request differed).
+    pub prefetched_renders_used: u64,
 }
 
 /// The EventTrack6D tracker (and, through [`super::TrackingMethod`], its baselines).
@@ -113,6 +117,9 @@ pub struct EventTrack6d {
     depth: DepthFrame,
     depth_t_us: Option<i64>,
     last_tick_us: Option<i64>,
+    /// The time between ticks, microseconds, averaged over the last few ticks (a 120 Hz timeline alternates
+    /// between 8,333 and 8,334 us): when the next tick is expected.
+    period_us: f64,
     counters: TrackerCounters,
     redetection: Redetection,
 }
@@ -270,6 +277,7 @@ impl EventTrack6d {
             scene,
             depth_t_us: None,
             last_tick_us: None,
+            period_us: 1e6 / 120.0,
             counters: TrackerCounters::default(),
             redetection,
         })
@@ -277,10 +285,35 @@ impl EventTrack6d {
 
     /// Counters since creation.
     pub fn counters(&self) -> TrackerCounters {
+        let prefetch = self.renderer.prefetch_counts();
         TrackerCounters {
             depth_fallbacks: self.objects.iter().map(|o| o.fallbacks).sum(),
             redetections: self.objects.iter().map(|o| o.redetections).sum(),
+            renders_prefetched: prefetch.started,
+            prefetched_renders_used: prefetch.used,
             ..self.counters
+        }
+    }
+
+    /// Starts each object's render for the tick expected at `next_t_us`, at the pose that tick will predict, in the
+    /// ROI it will choose without a depth frame ([`TrackerConfig::prefetch_renders`]). A failed prefetch is not
+    /// reported here: the next tick renders again and counts the error then.
+    fn prefetch_next(&mut self, next_t_us: i64) {
+        for (s, o) in self.scene.iter_mut().zip(&self.objects) {
+            let step = (next_t_us - o.t_us) as f64 * 1e-6;
+            s.pose = o.prediction(step.max(0.0), &self.config);
+        }
+        let scene = Scene::objects(&self.scene)
+            .geometry_only()
+            .normals_on_surface_grid(self.config.max_surface_points);
+        let camera = &self.rig.event_camera;
+        for (o, s) in self.objects.iter().zip(&self.scene) {
+            if next_t_us < o.t_us {
+                continue;
+            }
+            if let Some(roi) = o.roi_at(&s.pose, camera, &self.config, next_t_us, false) {
+                let _ = self.renderer.prefetch_roi(&scene, camera, &roi);
+            }
         }
     }
 
@@ -352,6 +385,9 @@ impl PoseTracker for EventTrack6d {
             .map(|t| (t_us - t) as f64 * 1e-6)
             .unwrap_or(1.0 / 120.0)
             .max(0.0);
+        if let Some(last) = self.last_tick_us {
+            self.period_us += 0.2 * ((t_us - last).max(0) as f64 - self.period_us);
+        }
         self.last_tick_us = Some(t_us);
         self.counters.ticks += 1;
         // A depth frame belongs to this tick if it was exposed within half a tick period of it.
@@ -413,6 +449,21 @@ impl PoseTracker for EventTrack6d {
             quality: o.quality,
             state: o.reported.get(),
         }));
+    }
+
+    fn prepare_next_tick(&mut self) {
+        if let Some(t_us) = self.last_tick_us
+            && self.config.prefetch_renders
+            && self.refines(false)
+        {
+            // The next tick falls on a whole microsecond next to the mean period: start both (one when they agree).
+            let next = t_us as f64 + self.period_us;
+            let (early, late) = (next.floor() as i64, next.ceil() as i64);
+            self.prefetch_next(early);
+            if late != early {
+                self.prefetch_next(late);
+            }
+        }
     }
 
     fn event_surface(&self) -> Option<&EventSurface> {

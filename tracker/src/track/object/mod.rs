@@ -185,7 +185,12 @@ impl ObjectTrack {
 
     /// Predicts the pose `dt_s` after the latest estimate (constant velocity about the centre).
     pub fn predict(&mut self, dt_s: f64, config: &TrackerConfig) {
-        self.predicted = if config.prediction && self.state != TrackingState::Lost {
+        self.predicted = self.prediction(dt_s, config);
+    }
+
+    /// The pose `dt_s` after the latest estimate that [`Self::predict`] would predict.
+    pub fn prediction(&self, dt_s: f64, config: &TrackerConfig) -> Isometry3<f64> {
+        if config.prediction && self.state != TrackingState::Lost {
             let mut xi = self.velocity * (dt_s * config.prediction_gain);
             if !config.predict_rotation {
                 xi.fixed_rows_mut::<3>(3).fill(0.0);
@@ -193,7 +198,7 @@ impl ObjectTrack {
             apply_step(&self.pose, &self.center_obj, &xi)
         } else {
             self.pose
-        };
+        }
     }
 
     /// The ROI around the predicted pose, if the object is in front of the camera. At a depth exposure
@@ -206,7 +211,20 @@ impl ObjectTrack {
         t_us: i64,
         depth_due: bool,
     ) -> Option<Roi> {
-        let mut c = self.center_at(&self.predicted);
+        self.roi = self.roi_at(&self.predicted, camera, config, t_us, depth_due);
+        self.roi
+    }
+
+    /// The ROI [`Self::update_roi`] would choose at `t_us` if `predicted` were the prediction.
+    pub fn roi_at(
+        &self,
+        predicted: &Isometry3<f64>,
+        camera: &PinholeCamera,
+        config: &TrackerConfig,
+        t_us: i64,
+        depth_due: bool,
+    ) -> Option<Roi> {
+        let mut c = self.center_at(predicted);
         let mut scale = config.roi_scale;
         if depth_due
             && config.depth_fallback_extrapolate
@@ -225,11 +243,9 @@ impl ObjectTrack {
         }
         // Behind the camera: no ROI (checked here so the lost path does not build an error message per tick).
         if !(c.z > 1e-3 && c.coords.iter().all(|v| v.is_finite())) {
-            self.roi = None;
             return None;
         }
-        self.roi = Roi::around_object(camera, &c, self.diameter, scale, config.roi_size).ok();
-        self.roi
+        Roi::around_object(camera, &c, self.diameter, scale, config.roi_size).ok()
     }
 
     /// Image speed of the object's outline predicted from the velocity, full-image pixels per second.
