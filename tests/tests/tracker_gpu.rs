@@ -67,9 +67,11 @@ fn prefetched_renders_change_no_estimate_and_most_ticks_take_them() {
         "{} ticks, {} renders prefetched, {} used",
         counters.ticks, counters.renders_prefetched, counters.prefetched_renders_used
     );
-    // Two renders per tick (the two whole microseconds a 120 Hz tick may fall on), one of them taken. Misses would
-    // be the first tick, depth ticks whose ROI widens and ticks after a re-detection moved the object.
-    assert!(counters.renders_prefetched + 2 >= 2 * counters.ticks);
+    // One render per tick once the timeline's pattern of periods (8333, 8333, 8334 us) is known, two before (the
+    // whole microseconds around the mean period). Misses would be the first tick, depth ticks whose ROI widens and
+    // ticks after a re-detection moved the object.
+    assert!(counters.renders_prefetched >= counters.ticks - 1);
+    assert!(counters.renders_prefetched <= counters.ticks + 8);
     assert!(
         counters.prefetched_renders_used * 10 >= counters.ticks * 9,
         "{} of {} ticks took a prefetched render",

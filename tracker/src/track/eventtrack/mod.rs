@@ -2,6 +2,7 @@
 //! its own ROI, with mutual occlusion through the other objects' rendered masks.
 
 mod lost_search;
+mod next_tick;
 mod place_check;
 mod step;
 
@@ -10,6 +11,7 @@ use super::object::{ObjectTrack, TickInputs};
 use super::redetect::{Cluster, DepthBackground};
 use super::{DepthFallbackCheck, PoseEstimate, PoseTracker, TrackingState};
 use lost_search::{PendingPlace, Search};
+use next_tick::NextTick;
 use place_check::{PlaceResult, ProbeSet};
 use step::ObjectStep;
 
@@ -117,9 +119,8 @@ pub struct EventTrack6d {
     depth: DepthFrame,
     depth_t_us: Option<i64>,
     last_tick_us: Option<i64>,
-    /// The time between ticks, microseconds, averaged over the last few ticks (a 120 Hz timeline alternates
-    /// between 8,333 and 8,334 us): when the next tick is expected.
-    period_us: f64,
+    /// When the next tick is expected (for the renders prefetched for it).
+    next_tick: NextTick,
     counters: TrackerCounters,
     redetection: Redetection,
 }
@@ -277,7 +278,7 @@ impl EventTrack6d {
             scene,
             depth_t_us: None,
             last_tick_us: None,
-            period_us: 1e6 / 120.0,
+            next_tick: NextTick::default(),
             counters: TrackerCounters::default(),
             redetection,
         })
@@ -385,9 +386,7 @@ impl PoseTracker for EventTrack6d {
             .map(|t| (t_us - t) as f64 * 1e-6)
             .unwrap_or(1.0 / 120.0)
             .max(0.0);
-        if let Some(last) = self.last_tick_us {
-            self.period_us += 0.2 * ((t_us - last).max(0) as f64 - self.period_us);
-        }
+        self.next_tick.record(t_us);
         self.last_tick_us = Some(t_us);
         self.counters.ticks += 1;
         // A depth frame belongs to this tick if it was exposed within half a tick period of it.
@@ -452,16 +451,10 @@ impl PoseTracker for EventTrack6d {
     }
 
     fn prepare_next_tick(&mut self) {
-        if let Some(t_us) = self.last_tick_us
-            && self.config.prefetch_renders
-            && self.refines(false)
-        {
-            // The next tick falls on a whole microsecond next to the mean period: start both (one when they agree).
-            let next = t_us as f64 + self.period_us;
-            let (early, late) = (next.floor() as i64, next.ceil() as i64);
-            self.prefetch_next(early);
-            if late != early {
-                self.prefetch_next(late);
+        if self.config.prefetch_renders && self.refines(false) {
+            let (times, count) = self.next_tick.candidates();
+            for &t in &times[..count] {
+                self.prefetch_next(t);
             }
         }
     }
