@@ -43,7 +43,7 @@ pub enum TrackError {
         /// What is wrong.
         reason: &'static str,
     },
-    /// The renderer refused a mesh.
+    /// The renderer refused a mesh or could not render the object's first ROI.
     #[error("object {object}: {source}")]
     Render {
         /// Object name.
@@ -261,7 +261,7 @@ impl EventTrack6d {
         } else {
             EventSurface::latest_times_only(cam.width, cam.height)
         };
-        Ok(Self {
+        let mut tracker = Self {
             surface,
             depth: DepthFrame {
                 index: 0,
@@ -281,7 +281,31 @@ impl EventTrack6d {
             next_tick: NextTick::default(),
             counters: TrackerCounters::default(),
             redetection,
-        })
+        };
+        tracker.render_first_rois()?;
+        Ok(tracker)
+    }
+
+    /// Renders each object's ROI at its first pose once, before any tick: a GPU compiles its pipelines and sizes
+    /// its buffers now rather than in the first tick's latency, and a renderer that cannot render fails here.
+    fn render_first_rois(&mut self) -> Result<(), TrackError> {
+        let scene = Scene::objects(&self.scene)
+            .geometry_only()
+            .normals_on_surface_grid(self.config.max_surface_points);
+        let camera = &self.rig.event_camera;
+        for (o, name) in self.objects.iter_mut().zip(&self.names) {
+            let first = o.pose;
+            let Some(roi) = o.roi_at(&first, camera, &self.config, o.t_us, false) else {
+                continue;
+            };
+            self.renderer
+                .render_roi(&scene, camera, &roi, &mut o.target)
+                .map_err(|source| TrackError::Render {
+                    object: name.clone(),
+                    source,
+                })?;
+        }
+        Ok(())
     }
 
     /// Counters since creation.
