@@ -37,7 +37,7 @@ impl NextTick {
 
     /// The times the next tick may come at, microseconds, and how many of the two there are: one when the
     /// remembered periods repeat a pattern of at most [`LONGEST_CYCLE`] periods (the next period continues it),
-    /// else the two whole microseconds around the mean period; none before the first tick.
+    /// else the whole microsecond at or below the mean period and the one after it; none before the first tick.
     pub(super) fn candidates(&self) -> ([i64; 2], usize) {
         let Some(last) = self.last_us else {
             return ([0; 2], 0);
@@ -55,13 +55,9 @@ impl NextTick {
         } else {
             recent.iter().sum::<i64>() as f64 / recent.len() as f64
         };
-        let next = last as f64 + mean;
-        let (early, late) = (next.floor() as i64, next.ceil() as i64);
-        if early == late {
-            ([early, 0], 1)
-        } else {
-            ([early, late], 2)
-        }
+        // A whole-microsecond mean (one period seen, say 8333) does not say whether 8334 comes next: both.
+        let early = (last as f64 + mean).floor() as i64;
+        ([early, early + 1], 2)
     }
 }
 
@@ -109,6 +105,11 @@ mod tests {
             prop_assert!(g.len() <= 2 && !g.is_empty());
             if g.len() == 2 {
                 prop_assert_eq!(g[1], g[0] + 1);
+            } else {
+                // One guess only when the 8 periods (between the 9 ticks) repeat a pattern of at most 4.
+                let periods = &jitter[1..];
+                let repeats = (1..=4).any(|c| periods[c..].iter().zip(periods).all(|(a, b)| a == b));
+                prop_assert!(repeats, "one guess for periods {:?}", periods);
             }
             prop_assert!((g[0] - t - 8_333).abs() <= 3);
         }
@@ -122,7 +123,14 @@ mod tests {
         // One tick: a nominal 120 Hz period.
         assert_eq!(guesses(&n), vec![8_833, 8_834]);
         n.record(500);
+        // One period of 0: the tick may repeat, or come a microsecond later.
+        assert_eq!(guesses(&n), vec![500, 501]);
         n.record(500);
         assert_eq!(guesses(&n), vec![500]);
+        // 120 Hz after one period: 8333 or 8334.
+        let mut n = NextTick::default();
+        n.record(500);
+        n.record(8_833);
+        assert_eq!(guesses(&n), vec![17_166, 17_167]);
     }
 }
