@@ -83,8 +83,11 @@ pub(super) struct UnpackJob {
 }
 
 impl UnpackJob {
+    /// Waits, unpacks and reports the outcome to the slot; a panic in the device code is reported as an error,
+    /// so a render waiting for this slot never waits forever.
     pub(super) fn run(self) {
-        let outcome = self.unpack();
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.unpack()))
+            .unwrap_or_else(|_| Err("the read-back thread panicked while unpacking".into()));
         if let Ok(mut s) = self.into.state.lock() {
             s.result = Some(outcome);
             s.pending = false;
