@@ -279,13 +279,14 @@ impl Renderer for GpuRenderer {
             &self.mapped,
         )?;
         read_back(
-            &self.gpu,
-            targets,
+            &self.gpu.device,
+            &targets.readback,
             &self.mapped,
             Some(submission),
-            request,
+            camera,
             target,
-        )?;
+        )
+        .map_err(|e| backend(&self.gpu, e))?;
         self.gpu.take_error()
     }
 

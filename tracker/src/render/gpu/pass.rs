@@ -6,6 +6,7 @@ use super::frame::{Targets, Uniforms, padded_row_bytes, unpack};
 use super::mesh::GpuMesh;
 use super::pipeline::Pipelines;
 use super::request::{MapResult, RenderRequest};
+use crate::geometry::PinholeCamera;
 use crate::render::{RenderError, RenderTarget};
 use std::sync::Arc;
 
@@ -106,38 +107,36 @@ pub(super) fn submit(
     Ok(submission)
 }
 
-/// Waits for `submission` (or finds it done), unpacks the mapped image of `request` from `targets` into `target`
-/// and releases the mapping.
+/// Waits for `submission` (or finds it done), unpacks the image `camera` sees from the mapped `readback` buffer
+/// into `target` and releases the mapping. The error says what failed (without the adapter's name).
 pub(super) fn read_back(
-    gpu: &Gpu,
-    targets: &Targets,
+    device: &wgpu::Device,
+    readback: &wgpu::Buffer,
     mapped: &MapResult,
     submission: Option<wgpu::SubmissionIndex>,
-    request: &RenderRequest,
+    camera: &PinholeCamera,
     target: &mut RenderTarget,
-) -> Result<(), RenderError> {
-    let (w, h) = request.size();
-    let polled = gpu.device.poll(wgpu::PollType::Wait {
+) -> Result<(), String> {
+    let polled = device.poll(wgpu::PollType::Wait {
         submission_index: submission,
         timeout: None,
     });
     let map_result = mapped.lock().ok().and_then(|mut slot| slot.take());
-    polled.map_err(|e| backend(gpu, format!("waiting for the GPU failed: {e}")))?;
+    polled.map_err(|e| format!("waiting for the GPU failed: {e}"))?;
     match map_result {
         Some(Ok(())) => {}
-        Some(Err(e)) => return Err(backend(gpu, format!("reading the image back failed: {e}"))),
-        None => return Err(backend(gpu, "the image read-back never completed".into())),
+        Some(Err(e)) => return Err(format!("reading the image back failed: {e}")),
+        None => return Err("the image read-back never completed".into()),
     }
+    let (w, h) = (camera.width, camera.height);
     let row_bytes = padded_row_bytes(w);
-    let slice = targets
-        .readback
-        .slice(..u64::from(row_bytes) * u64::from(h));
+    let slice = readback.slice(..u64::from(row_bytes) * u64::from(h));
     target.reset(w, h);
-    target.camera = request.camera;
+    target.camera = Some(*camera);
     let unpacked = slice
         .get_mapped_range()
         .map(|view| unpack(&view, row_bytes as usize, target))
-        .map_err(|e| backend(gpu, format!("mapping the read-back buffer failed: {e}")));
-    targets.readback.unmap();
+        .map_err(|e| format!("mapping the read-back buffer failed: {e}"));
+    readback.unmap();
     unpacked
 }

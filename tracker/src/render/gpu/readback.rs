@@ -1,7 +1,7 @@
 //! A helper thread that waits for prefetched renders and unpacks them into CPU memory, so the image is ready when
 //! the tick that asks for it starts: the tick then only swaps render targets.
 
-use super::frame::{padded_row_bytes, unpack};
+use super::pass::read_back;
 use super::request::MapResult;
 use crate::geometry::PinholeCamera;
 use crate::render::RenderTarget;
@@ -96,34 +96,19 @@ impl UnpackJob {
     }
 
     fn unpack(&self) -> Result<(), String> {
-        self.device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(self.submission.clone()),
-                timeout: None,
-            })
-            .map_err(|e| format!("waiting for the GPU failed: {e}"))?;
-        match self.mapped.lock().ok().and_then(|mut m| m.take()) {
-            Some(Ok(())) => {}
-            Some(Err(e)) => return Err(format!("reading the image back failed: {e}")),
-            None => return Err("the image read-back never completed".into()),
-        }
-        let (w, h) = (self.camera.width, self.camera.height);
-        let row_bytes = padded_row_bytes(w);
-        let slice = self.readback.slice(..u64::from(row_bytes) * u64::from(h));
-        let unpacked = match self.into.state.lock() {
-            Ok(mut s) => {
-                let target = &mut s.target;
-                target.reset(w, h);
-                target.camera = Some(self.camera);
-                slice
-                    .get_mapped_range()
-                    .map(|view| unpack(&view, row_bytes as usize, target))
-                    .map_err(|e| format!("mapping the read-back buffer failed: {e}"))
-            }
-            Err(_) => Err("the prefetch slot's image was poisoned".into()),
-        };
-        self.readback.unmap();
-        unpacked
+        let mut s = self
+            .into
+            .state
+            .lock()
+            .map_err(|_| "the prefetch slot's image was poisoned".to_owned())?;
+        read_back(
+            &self.device,
+            &self.readback,
+            &self.mapped,
+            Some(self.submission.clone()),
+            &self.camera,
+            &mut s.target,
+        )
     }
 }
 
