@@ -17,7 +17,8 @@ pub(super) struct ObjectStep<'a> {
 }
 
 impl ObjectStep<'_> {
-    /// Renders each object's ROI and refines (or holds) it; returns the number of failed renders.
+    /// Prepares each object's depth, renders its ROI and refines it (or holds it when the tick does not refine);
+    /// returns the number of failed renders.
     pub(super) fn run(&self, objects: &mut [ObjectTrack], renderer: &mut dyn Renderer) -> u64 {
         let mut errors = 0;
         let t_us = self.inputs.t_us;
@@ -30,6 +31,12 @@ impl ObjectStep<'_> {
             } else {
                 None
             };
+            if !self.refines {
+                o.hold(t_us);
+                continue;
+            }
+            // Before the render is taken, so that a render still in flight overlaps it.
+            let depth = o.prepare_depth(&self.inputs, self.config);
             if let Some(roi) = roi
                 && renderer
                     .render_roi(self.scene, self.camera, &roi, &mut o.target)
@@ -38,11 +45,7 @@ impl ObjectStep<'_> {
                 errors += 1;
                 o.roi = None;
             }
-            if self.refines {
-                o.refine(&self.inputs, self.config);
-            } else {
-                o.hold(t_us);
-            }
+            o.refine(&self.inputs, self.config, depth);
         }
         errors
     }
@@ -56,8 +59,8 @@ impl ObjectStep<'_> {
         renderer: &mut dyn Renderer,
         workers: &mut [Box<dyn Renderer + Send>],
     ) -> u64 {
-        let per_thread = objects.len().div_ceil(workers.len() + 1);
-        if workers.is_empty() || objects.len() <= per_thread {
+        let per_thread = own_share(objects.len(), workers.len());
+        if per_thread == objects.len() {
             return self.run(objects, renderer);
         }
         let mut shares = objects.chunks_mut(per_thread);
@@ -73,5 +76,16 @@ impl ObjectStep<'_> {
             }
             errors
         })
+    }
+}
+
+/// How many objects, from the first, [`ObjectStep::run_split`] steps on the tracker's own thread when `workers`
+/// other renderers step the rest: all of them without workers, else an even share.
+pub(super) fn own_share(objects: usize, workers: usize) -> usize {
+    let per_thread = objects.div_ceil(workers + 1);
+    if workers == 0 || objects <= per_thread {
+        objects
+    } else {
+        per_thread
     }
 }

@@ -11,12 +11,73 @@ use crate::track::fallback_check::{
 };
 use nalgebra::{Isometry3, Translation3, Vector3, Vector6};
 
+/// The depth a tick's refinement uses, prepared by [`ObjectTrack::prepare_depth`] before the ROI render is taken.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct TickDepth {
+    /// A depth frame exposed at this tick was registered as the new `D_0`.
+    fresh: bool,
+    /// Weight of the depth term (1 for a fresh frame, `carried_depth_weight` between frames, 0 without depth).
+    weight: f64,
+    /// `depth_now` holds `D_t` rendered at the predicted pose.
+    at_predicted: bool,
+}
+
 impl ObjectTrack {
+    /// Registers this tick's depth frame as the new `D_0` and renders `D_t` at the predicted pose in the ROI chosen
+    /// by [`Self::update_roi`]. None of it reads the ROI render, so the tracker runs it before taking the render:
+    /// a render that is still in flight (prefetched on a GPU) overlaps this work.
+    pub fn prepare_depth(&mut self, inputs: &TickInputs<'_>, config: &TrackerConfig) -> TickDepth {
+        let Some(roi) = self.roi else {
+            return TickDepth::default();
+        };
+        let roi_camera = inputs.camera.crop(&roi);
+        let predicted = self.predicted;
+        let fresh = inputs.depth.is_some()
+            && match config.depth {
+                DepthUse::EveryTick | DepthUse::DepthFramesOnly => true,
+                DepthUse::FirstFrameOnly => self.depth_frames_used == 0,
+                DepthUse::Off => false,
+            };
+        let mut depth = TickDepth::default();
+        if fresh {
+            if let Some(frame) = inputs.depth {
+                self.capture_neighbourhood(frame, inputs.depth_rig, config);
+                self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
+                self.carried
+                    .render(&predicted, &roi_camera, &mut self.depth_now);
+                depth = TickDepth {
+                    fresh: true,
+                    weight: 1.0,
+                    at_predicted: true,
+                };
+            }
+        } else if config.depth == DepthUse::EveryTick && !self.carried.is_empty() {
+            // Rendered at the pose the refinement starts from: here if the occluded outline is hidden, which needs
+            // it at the prediction, else in `refine`.
+            depth.weight = config.carried_depth_weight;
+            if config.hide_occluded_outline && depth.weight > 0.0 {
+                self.carried
+                    .render(&predicted, &roi_camera, &mut self.depth_now);
+                depth.at_predicted = true;
+            }
+        }
+        depth
+    }
+
     /// Refines the predicted pose at this tick from the render already in `self.target` (made at the predicted
-    /// poses of all objects) and updates quality, state and velocity.
-    pub fn refine(&mut self, inputs: &TickInputs<'_>, config: &TrackerConfig) {
+    /// poses of all objects) and `depth` from [`Self::prepare_depth`], and updates quality, state and velocity.
+    pub fn refine(&mut self, inputs: &TickInputs<'_>, config: &TrackerConfig, depth: TickDepth) {
         self.fallback_check = None;
         let Some(roi) = self.roi else {
+            if depth.fresh {
+                // The render failed after the frame was registered: its points move with the pose reported.
+                self.carried.attach_to_object(
+                    &self.predicted,
+                    &self.aabb_min,
+                    &self.aabb_max,
+                    0.01,
+                );
+            }
             self.finish(inputs, self.predicted, None, None, config);
             return;
         };
@@ -30,36 +91,14 @@ impl ObjectTrack {
             config.max_surface_points,
             config.max_contour_points,
         );
-
-        // Depth: which D_t is available at this tick, and its weight.
-        let fresh = inputs.depth.is_some()
-            && match config.depth {
-                DepthUse::EveryTick | DepthUse::DepthFramesOnly => true,
-                DepthUse::FirstFrameOnly => self.depth_frames_used == 0,
-                DepthUse::Off => false,
-            };
-        let mut depth_weight = 0.0;
-        if fresh {
-            if let Some(frame) = inputs.depth {
-                self.capture_neighbourhood(frame, inputs.depth_rig, config);
-                self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
-                self.carried
-                    .render(&predicted, &roi_camera, &mut self.depth_now);
-                depth_weight = 1.0;
-            }
-        } else if config.depth == DepthUse::EveryTick && !self.carried.is_empty() {
-            // Rendered below, at the pose the refinement starts from.
-            depth_weight = config.carried_depth_weight;
-        }
+        let TickDepth {
+            fresh,
+            weight: depth_weight,
+            at_predicted: depth_now_at_predicted,
+        } = depth;
         // Outline the depth shows behind a nearer surface (a hand gripping the object) fires no events: leave it
         // out of the event and intensity terms rather than pull it onto the occluder's edges.
-        let mut depth_now_at_predicted = fresh;
         if config.hide_occluded_outline && depth_weight > 0.0 {
-            if !fresh {
-                self.carried
-                    .render(&predicted, &roi_camera, &mut self.depth_now);
-                depth_now_at_predicted = true;
-            }
             self.view.hide_occluded_contour(
                 &self.depth_now,
                 &roi_camera,
