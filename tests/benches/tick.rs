@@ -1,6 +1,7 @@
 //! One full tracker tick (reconstruction + refinement) at a 160x160 ROI on one core, after replaying a generated
 //! mug shake: a plain 120 Hz tick (carried depth + events) and a depth-exposure tick (registration of the new
-//! frame + refinement), with the CPU renderer and the wgpu renderer. The `render_in_*` benches time only the
+//! frame + refinement), with the CPU renderer on the tracker's thread alone (`cpu`), the CPU renderer rendering
+//! ahead on a second thread as by default (`cpu_ahead`), and the wgpu renderer. The `render_in_*` benches time only the
 //! renderer's calls inside the same ticks, so a tick's cost splits into rendering and everything else. The
 //! `paced/*_at_120hz` benches run the same ticks one tick period apart, as a live stream does.
 
@@ -10,7 +11,7 @@ use eventtrack6d_tests::tick_fixture::{SteadyTracker, mug_recording, steady_trac
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
-use tracker::render::{CpuRenderer, Renderer, RendererKind, create_renderer};
+use tracker::render::{CpuRenderer, RenderAhead, Renderer, RendererKind, create_renderer};
 use tracker::track::{PoseTracker, TrackerConfig};
 
 /// Adds the wall time from its creation to its drop to `spent_ns`: held by [`HookedRenderer`] around one render.
@@ -149,10 +150,12 @@ fn bench_render_share(c: &mut Criterion, label: &str, mut s: SteadyTracker, spen
     });
 }
 
-/// A steady tracker on `rec` whose renderer `inner` adds its render time to the returned counter.
+/// A steady tracker on `rec` with `config` whose renderer `inner` adds its render time to the returned counter
+/// (the time the tracker's thread spends in it: for a renderer that renders ahead, the wait and the swap).
 fn timed_tracker(
     rec: &drivers::recording::Recording,
     inner: Box<dyn Renderer + Send>,
+    config: TrackerConfig,
 ) -> (SteadyTracker, Arc<AtomicU64>) {
     let spent_ns = Arc::new(AtomicU64::new(0));
     let counter = Arc::clone(&spent_ns);
@@ -160,20 +163,42 @@ fn timed_tracker(
         start: Instant::now(),
         spent_ns: Arc::clone(&counter),
     });
-    let s = steady_tracker(rec.clone(), TrackerConfig::default(), Box::new(timed));
+    let s = steady_tracker(rec.clone(), config, Box::new(timed));
     (s, spent_ns)
 }
 
 fn ticks(c: &mut Criterion) {
     let dir = std::env::temp_dir().join("eventtrack6d-tick-bench");
     let rec = mug_recording(&dir, 0.5);
+    // `cpu`: the CPU renderer on the tracker's thread alone (one core, `prefetch_renders = false`).
+    let one_thread = TrackerConfig {
+        prefetch_renders: false,
+        ..TrackerConfig::default()
+    };
     let cpu: Box<dyn Renderer + Send> = Box::new(CpuRenderer::new());
-    let mut s = steady_tracker(rec.clone(), TrackerConfig::default(), cpu);
+    let mut s = steady_tracker(rec.clone(), one_thread.clone(), cpu);
     bench_tracker(c, "cpu", &mut s);
     bench_paced(c, "cpu", &mut s, None);
-    let (mut s, spent) = timed_tracker(&rec, Box::new(CpuRenderer::new()));
+    let (mut s, spent) = timed_tracker(&rec, Box::new(CpuRenderer::new()), one_thread);
     bench_paced(c, "cpu", &mut s, Some(&spent));
     bench_render_share(c, "cpu", s, &spent);
+    // `cpu_ahead`: the defaults, with which the tracker renders each next ROI ahead on the `render-ahead` thread.
+    let mut s = steady_tracker(
+        rec.clone(),
+        TrackerConfig::default(),
+        Box::new(CpuRenderer::new()),
+    );
+    bench_tracker(c, "cpu_ahead", &mut s);
+    bench_paced(c, "cpu_ahead", &mut s, None);
+    let counts = s.tracker.counters();
+    eprintln!(
+        "cpu_ahead ticks: {} renders ahead, {} used",
+        counts.renders_prefetched, counts.prefetched_renders_used
+    );
+    // The timer wraps the renderer that renders ahead, so it times the tick thread's wait and swap.
+    let ahead = RenderAhead::new(Box::new(CpuRenderer::new()));
+    let (mut s, spent) = timed_tracker(&rec, Box::new(ahead), TrackerConfig::default());
+    bench_paced(c, "cpu_ahead", &mut s, Some(&spent));
     match create_renderer(RendererKind::Gpu) {
         Ok(gpu) => {
             let mut s = steady_tracker(rec.clone(), TrackerConfig::default(), gpu);
@@ -186,7 +211,7 @@ fn ticks(c: &mut Criterion) {
             );
             match create_renderer(RendererKind::Gpu) {
                 Ok(gpu) => {
-                    let (mut s, spent) = timed_tracker(&rec, gpu);
+                    let (mut s, spent) = timed_tracker(&rec, gpu, TrackerConfig::default());
                     bench_paced(c, "gpu", &mut s, Some(&spent));
                     bench_render_share(c, "gpu", s, &spent);
                 }

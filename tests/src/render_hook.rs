@@ -54,6 +54,10 @@ impl<G: 'static> Renderer for HookedRenderer<G> {
         self.inner.prefetch_counts()
     }
 
+    fn renders_ahead(&self) -> bool {
+        self.inner.renders_ahead()
+    }
+
     fn fork(&self) -> Option<Box<dyn Renderer + Send>> {
         Some(Box::new(Self {
             inner: self.inner.fork()?,

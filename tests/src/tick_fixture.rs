@@ -1,5 +1,6 @@
 //! A tracker in steady state on a short generated recording, for the per-tick benchmark and the no-allocation
-//! test: the recording is replayed up to its last tick, after which the caller can repeat ticks at will.
+//! test: the recording is replayed up to its last tick, after which the caller can repeat ticks at will. And the
+//! bits of every estimate of such a replay, for tests that check an option changes no estimate.
 
 use drivers::recording::{DepthFrame, Recording};
 use drivers::timeline::Tick;
@@ -10,7 +11,8 @@ use std::path::Path;
 use tracker::eval::{PoseTrack, recording_ticks};
 use tracker::render::Renderer;
 use tracker::track::{
-    EventTrack6d, PoseTracker, TrackerConfig, recording_object, recording_rig, track_recording,
+    EventTrack6d, PoseTracker, TrackerConfig, TrackerCounters, recording_object, recording_rig,
+    track_recording,
 };
 
 /// A warmed-up tracker and what to feed it for one more tick.
@@ -46,18 +48,9 @@ pub fn steady_tracker(
     config: TrackerConfig,
     renderer: Box<dyn Renderer + Send>,
 ) -> SteadyTracker {
-    let gt = recording
-        .ground_truth
-        .clone()
-        .expect("fixture has ground truth");
-    let track = PoseTrack::from_samples(&gt, "mug");
+    let (mut tracker, first_t_us) = mug_tracker(&recording, config, renderer);
+    track_recording(&recording, &mut tracker, first_t_us, |_, _, _| {}, |_| {}).expect("replay");
     let ticks = recording_ticks(&recording).expect("ticks");
-    let first = ticks[0];
-    let pose = track.interpolated_at(first.t_us).expect("first pose");
-    let object = recording_object(&recording, "mug", first.t_us, pose).expect("model");
-    let rig = recording_rig(&recording).expect("rig");
-    let mut tracker = EventTrack6d::new(config, rig, vec![object], renderer).expect("tracker");
-    track_recording(&recording, &mut tracker, first.t_us, |_, _, _| {}, |_| {}).expect("replay");
     let last_tick = *ticks.last().expect("ticks");
     let depth_index = recording
         .depth_frames
@@ -72,4 +65,53 @@ pub fn steady_tracker(
         depth,
         recording,
     }
+}
+
+/// One estimate of a replay, bit for bit: time (microseconds), pose bits (translation, quaternion), quality bits and
+/// state.
+pub type EstimateBits = (i64, [u64; 7], u32, String);
+
+/// Replays `recording` (its mug from the ground truth's first pose) through EventTrack6D with `config` and
+/// `renderer`, as `eventtrack6d track` does; returns every estimate's bits and the tracker's counters.
+pub fn replay_bits(
+    recording: &Recording,
+    config: TrackerConfig,
+    renderer: Box<dyn Renderer + Send>,
+) -> (Vec<EstimateBits>, TrackerCounters) {
+    let (mut tracker, first_t_us) = mug_tracker(recording, config, renderer);
+    let mut out = Vec::new();
+    track_recording(
+        recording,
+        &mut tracker,
+        first_t_us,
+        |_, estimates, _| {
+            for e in estimates {
+                let (t, q) = (e.pose.translation.vector, e.pose.rotation.coords);
+                let bits = [t.x, t.y, t.z, q.x, q.y, q.z, q.w].map(f64::to_bits);
+                out.push((e.t_us, bits, e.quality.to_bits(), format!("{:?}", e.state)));
+            }
+        },
+        |_| {},
+    )
+    .expect("replay");
+    (out, tracker.counters())
+}
+
+/// A tracker of `recording`'s mug from its ground-truth pose at the first tick, and that tick's time (microseconds).
+fn mug_tracker(
+    recording: &Recording,
+    config: TrackerConfig,
+    renderer: Box<dyn Renderer + Send>,
+) -> (EventTrack6d, i64) {
+    let gt = recording
+        .ground_truth
+        .clone()
+        .expect("fixture has ground truth");
+    let track = PoseTrack::from_samples(&gt, "mug");
+    let first = recording_ticks(recording).expect("ticks")[0];
+    let pose = track.interpolated_at(first.t_us).expect("first pose");
+    let object = recording_object(recording, "mug", first.t_us, pose).expect("model");
+    let rig = recording_rig(recording).expect("rig");
+    let tracker = EventTrack6d::new(config, rig, vec![object], renderer).expect("tracker");
+    (tracker, first.t_us)
 }

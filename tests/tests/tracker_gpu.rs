@@ -3,26 +3,13 @@
 //!
 //! Needs a Vulkan adapter (lavapipe on CI, as `render_gpu.rs`); without one it fails, naming the package.
 
-use eventtrack6d_tests::tick_fixture::mug_recording;
-use tracker::eval::{PoseTrack, recording_ticks};
+use eventtrack6d_tests::tick_fixture::{EstimateBits, mug_recording, replay_bits};
 use tracker::render::{RendererKind, create_renderer};
-use tracker::track::{
-    EventTrack6d, TrackerConfig, TrackerCounters, recording_object, recording_rig, track_recording,
-};
+use tracker::track::{TrackerConfig, TrackerCounters};
 
-/// Pose bits, quality bits and state of every estimate of a replay, and the tracker's counters.
-/// One estimate: time, pose bits (translation, quaternion), quality bits, state.
-type Estimate = (i64, [u64; 7], u32, String);
-
-fn replay(prefetch: bool) -> (Vec<Estimate>, TrackerCounters) {
+fn replay(prefetch: bool) -> (Vec<EstimateBits>, TrackerCounters) {
     let dir = std::env::temp_dir().join("eventtrack6d-tracker-gpu-test");
     let recording = mug_recording(&dir, 0.5);
-    let gt = recording.ground_truth.clone().expect("ground truth");
-    let track = PoseTrack::from_samples(&gt, "mug");
-    let first = recording_ticks(&recording).expect("ticks")[0];
-    let pose = track.interpolated_at(first.t_us).expect("first pose");
-    let object = recording_object(&recording, "mug", first.t_us, pose).expect("model");
-    let rig = recording_rig(&recording).expect("rig");
     let renderer = create_renderer(RendererKind::Gpu).unwrap_or_else(|e| {
         panic!("no GPU renderer ({e}): install mesa-vulkan-drivers (lavapipe), as .ci/setup does")
     });
@@ -30,23 +17,7 @@ fn replay(prefetch: bool) -> (Vec<Estimate>, TrackerCounters) {
         prefetch_renders: prefetch,
         ..TrackerConfig::default()
     };
-    let mut tracker = EventTrack6d::new(config, rig, vec![object], renderer).expect("tracker");
-    let mut out = Vec::new();
-    track_recording(
-        &recording,
-        &mut tracker,
-        first.t_us,
-        |_, estimates, _| {
-            for e in estimates {
-                let (t, q) = (e.pose.translation.vector, e.pose.rotation.coords);
-                let bits = [t.x, t.y, t.z, q.x, q.y, q.z, q.w].map(f64::to_bits);
-                out.push((e.t_us, bits, e.quality.to_bits(), format!("{:?}", e.state)));
-            }
-        },
-        |_| {},
-    )
-    .expect("replay");
-    (out, tracker.counters())
+    replay_bits(&recording, config, renderer)
 }
 
 #[test]

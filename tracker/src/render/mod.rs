@@ -9,12 +9,14 @@
 //! Rendering a region of interest is rendering with the ROI's intrinsics ([`PinholeCamera::crop`]);
 //! [`Renderer::render_roi`] does exactly that.
 
+mod ahead;
 mod cpu;
 #[cfg(feature = "gpu")]
 mod gpu;
 mod scene;
 mod target;
 
+pub use ahead::RenderAhead;
 pub use cpu::CpuRenderer;
 #[cfg(feature = "gpu")]
 pub use gpu::GpuRenderer;
@@ -178,6 +180,12 @@ pub trait Renderer {
     ) -> Result<bool, RenderError> {
         let _ = (scene, camera, roi);
         Ok(false)
+    }
+
+    /// Whether [`Self::prefetch_roi`] starts renders (the GPU backend, [`RenderAhead`]). The tracker wraps a
+    /// renderer that does not in a [`RenderAhead`] when it prefetches renders.
+    fn renders_ahead(&self) -> bool {
+        false
     }
 
     /// Renders started by [`Self::prefetch_roi`] and taken by a later render, since the renderer was made.

@@ -200,6 +200,10 @@ impl Worker {
         let mut h = self.health.lock().unwrap_or_else(|p| p.into_inner());
         h.queue = queue;
         h.timeline = timeline;
+        // Also what the last tick's `prepare_next_tick` did, which the per-tick update precedes.
+        if h.tracker.is_some() {
+            h.tracker = self.tracker.tracker_counters();
+        }
         for (sh, s) in h.sinks.iter_mut().zip(&self.sinks) {
             sh.counters = s.counters();
         }

@@ -188,9 +188,10 @@ pub struct TrackerConfig {
     /// depend on it.
     pub object_threads: usize,
     /// At the end of a tick, start rendering each object's next ROI at the pose the next tick will predict (one
-    /// tick period later, no depth frame), so a GPU renderer rasterises between ticks. The next tick takes that
-    /// image only for an identical request, so poses do not depend on it; renderers that render only on request
-    /// (the CPU renderer) ignore it.
+    /// tick period later, no depth frame): a GPU renderer rasterises between ticks, and a renderer that renders on
+    /// the caller's thread (the CPU renderer) renders on a helper thread (`render-ahead`, a
+    /// [`crate::render::RenderAhead`]). The next tick takes that image only for an identical request, so poses do
+    /// not depend on it. `false` keeps the CPU renderer on the tracker's thread alone.
     pub prefetch_renders: bool,
 }
 

@@ -369,4 +369,8 @@ impl Renderer for GpuRenderer {
     fn prefetch_counts(&self) -> PrefetchCounts {
         self.counts
     }
+
+    fn renders_ahead(&self) -> bool {
+        true
+    }
 }

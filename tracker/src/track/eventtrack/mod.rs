@@ -18,7 +18,7 @@ use step::ObjectStep;
 use crate::geometry::{PinholeCamera, se3};
 use crate::mesh::{Mesh, Symmetry};
 use crate::recon::{DepthRig, EventSurface};
-use crate::render::{RenderError, Renderer, Scene, SceneObject};
+use crate::render::{RenderAhead, RenderError, Renderer, Scene, SceneObject};
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
@@ -165,6 +165,12 @@ impl EventTrack6d {
         }
         if objects.len() > 65534 {
             return Err(TrackError::TooManyObjects(objects.len()));
+        }
+        if config.prefetch_renders
+            && config.depth != DepthUse::DepthFramesOnly
+            && !renderer.renders_ahead()
+        {
+            renderer = Box::new(RenderAhead::new(renderer));
         }
         let mut tracks = Vec::with_capacity(objects.len());
         let mut scene = Vec::with_capacity(objects.len());
@@ -332,7 +338,9 @@ impl EventTrack6d {
             .geometry_only()
             .normals_on_surface_grid(self.config.max_surface_points);
         let camera = &self.rig.event_camera;
-        for (o, s) in self.objects.iter().zip(&self.scene) {
+        // Objects stepped by the other threads' renderers would not take a render made by this one.
+        let own = step::own_share(self.objects.len(), self.workers.len());
+        for (o, s) in self.objects.iter().zip(&self.scene).take(own) {
             if next_t_us < o.t_us {
                 continue;
             }
