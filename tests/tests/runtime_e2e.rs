@@ -86,6 +86,7 @@ recording = "{}"
 method = "eventtrack6d"
 [output]
 dir = "{}"
+latency_log = "latency.csv"
 [status]
 period_ms = 50
 [sinks]
@@ -183,6 +184,31 @@ candump_log = "poses.candump.log"
     assert_eq!(summary.status["ticks"], ticks.len() as u64);
     let rate = summary.tick_rate_hz.unwrap();
     assert!((90.0..=150.0).contains(&rate), "tick rate {rate} Hz");
+
+    // The latency log: one row per tick, at the tick's time, whose latencies are the ones the summary counts.
+    let log_path = summary.outputs.latency_log.clone().unwrap();
+    assert_eq!(log_path, out_dir.join("latency.csv"));
+    let log = std::fs::read_to_string(&log_path).unwrap();
+    let mut lines = log.lines();
+    assert_eq!(lines.next(), Some(tracker::runtime::LATENCY_LOG_HEADER));
+    let log_rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(log_rows.len(), ticks.len());
+    for (row, t) in log_rows.iter().zip(&ticks) {
+        assert_eq!(row.len(), 7);
+        assert_eq!(row[0] as i64, t.t_us);
+        assert_eq!(row[1] == 1.0, t.depth_frame.is_some());
+        // waited + tick + sinks is the latency, each part measured on the same clock (rounding: 3 x 0.5 ns).
+        assert!((row[2] + row[3] + row[4] - row[5]).abs() < 0.002, "{row:?}");
+        assert!(row[3] > 0.0 && row[6] >= 0.0, "{row:?}");
+    }
+    let log_max = log_rows.iter().map(|r| r[5]).fold(0.0, f64::max);
+    let summary_max = summary.latency.max_us.unwrap();
+    assert!(
+        (log_max - summary_max).abs() < 0.001,
+        "{log_max} against {summary_max}"
+    );
 
     // The CSV sink's poses, by time.
     let csv_path = summary.outputs.csv.clone().unwrap();

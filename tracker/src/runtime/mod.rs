@@ -12,6 +12,7 @@
 
 pub mod config;
 pub mod health;
+pub mod latency_log;
 pub mod pulse_hold;
 pub mod queue;
 pub mod replay;
@@ -23,6 +24,7 @@ pub mod worker;
 
 pub use config::{Config, ConfigError, Pace, SourceKind};
 pub use health::{Health, LatencyHistogram, LatencySummary};
+pub use latency_log::{LATENCY_LOG_HEADER, LatencyLog, TickTiming};
 pub use setup::{OutputPaths, SceneObject, TrackerScene, build_tracker};
 pub use source::{Source, SourceError, SourceOutput, SourceStats, StopFlag};
 pub use summary::{SinkSummary, Summary};
@@ -116,10 +118,16 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
         .build()
         .map_err(|e| RuntimeError::Thread(format!("cannot start the tokio runtime: {e}")))?;
     let (mut sinks, outputs) = setup::build_file_sinks(config)?;
+    let latency_log = setup::build_latency_log(config)?;
     // zenoh first: it is what robots subscribe to, so it gets the earliest slot of every tick.
     let network = sinks::build_network_sinks(config, &objects, &outputs, rt.handle())?;
     let outputs = OutputPaths {
         candump: network.candump.clone().or(outputs.candump),
+        latency_log: config
+            .output
+            .latency_log
+            .as_ref()
+            .map(|p| config.output.dir.join(p)),
         ..outputs
     };
     let mut all: Vec<Box<dyn crate::publish::PoseSink>> = network.sinks;
@@ -144,6 +152,7 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
         status_period: Duration::from_millis(config.status.period_ms),
         wait_for_room: config.source.pace == Pace::Fast,
         rt_priority: config.tracker.realtime_priority,
+        latency_log,
     };
     let result = rt.block_on(run_parts(parts, hooks));
     rt.shutdown_timeout(Duration::from_secs(2));
@@ -167,6 +176,7 @@ struct Parts {
     status_period: Duration,
     wait_for_room: bool,
     rt_priority: u8,
+    latency_log: Option<LatencyLog>,
 }
 
 fn snapshot(health: &Mutex<Health>) -> Health {
@@ -193,12 +203,14 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         status_period,
         wait_for_room,
         rt_priority,
+        latency_log,
     } = p;
     let stop = hooks.stop.clone();
     let describe = source.describe();
 
     // The tracker thread.
-    let worker = Worker::new(tracker, sinks, timeline, queue.clone(), health.clone());
+    let worker = Worker::new(tracker, sinks, timeline, queue.clone(), health.clone())
+        .with_latency_log(latency_log);
     let tracker_thread = std::thread::Builder::new()
         .name("tracker".into())
         .spawn(move || {

@@ -3,6 +3,7 @@
 
 use super::RuntimeError;
 use super::config::{Config, ObjectConfig, SourceKind};
+use super::latency_log::LatencyLog;
 use super::replay::ReplaySource;
 use super::source::{Source, SourceError};
 use crate::eval::{PoseTrack, ground_truth_objects, symmetries_of};
@@ -248,6 +249,8 @@ pub struct OutputPaths {
     pub csv: Option<PathBuf>,
     /// The candump log, when on.
     pub candump: Option<PathBuf>,
+    /// The per-tick latency log, when on.
+    pub latency_log: Option<PathBuf>,
 }
 
 /// The file sinks of a configuration (the network sinks are added by [`super::sinks`]).
@@ -256,7 +259,10 @@ pub fn build_file_sinks(
 ) -> Result<(Vec<Box<dyn PoseSink>>, OutputPaths), RuntimeError> {
     let mut sinks: Vec<Box<dyn PoseSink>> = Vec::new();
     let mut paths = OutputPaths::default();
-    if config.sinks.csv || (config.can.enabled && config.can.candump_log.is_some()) {
+    if config.sinks.csv
+        || (config.can.enabled && config.can.candump_log.is_some())
+        || config.output.latency_log.is_some()
+    {
         std::fs::create_dir_all(&config.output.dir).map_err(|e| {
             RuntimeError::Output(format!(
                 "output.dir {}: cannot create: {e}",
@@ -270,4 +276,15 @@ pub fn build_file_sinks(
         paths.csv = Some(path);
     }
     Ok((sinks, paths))
+}
+
+/// The per-tick latency log of a configuration, when `[output] latency_log` is set (after
+/// [`build_file_sinks`], which creates the output directory).
+pub fn build_latency_log(config: &Config) -> Result<Option<LatencyLog>, RuntimeError> {
+    config
+        .output
+        .latency_log
+        .as_ref()
+        .map(|p| LatencyLog::create(&config.output.dir.join(p)))
+        .transpose()
 }

@@ -3,6 +3,7 @@
 //! and after all sinks). Steady state allocates nothing: buffers are reused and event batches recycled.
 
 use super::health::Health;
+use super::latency_log::{LatencyLog, TickTiming};
 use super::pulse_hold::PulseHold;
 use super::queue::{Ingest, IngestQueue};
 use crate::publish::{PoseSink, TickPoses};
@@ -78,8 +79,10 @@ fn set_fifo_priority(priority: u8) -> Result<(), String> {
 pub struct WorkerEnd {
     /// The sinks, flushed (returned so the caller can close them).
     pub sinks: Vec<Box<dyn PoseSink>>,
-    /// Flush errors, by sink name.
+    /// Flush errors, by sink name, and the latency log's write error.
     pub flush_errors: Vec<String>,
+    /// Rows written to the latency log, when one was kept.
+    pub latency_log_rows: Option<u64>,
 }
 
 /// The tracker thread's state.
@@ -96,6 +99,7 @@ pub struct Worker {
     sink_failed: Vec<Option<String>>,
     first_tick_wall: Option<Instant>,
     reported_errors: Vec<bool>,
+    latency_log: Option<LatencyLog>,
 }
 
 impl Worker {
@@ -122,7 +126,14 @@ impl Worker {
             sink_failed: vec![None; n],
             first_tick_wall: None,
             reported_errors: vec![false; n],
+            latency_log: None,
         }
+    }
+
+    /// Also writes one row per tick into `log` ([`TickTiming`]).
+    pub fn with_latency_log(mut self, log: Option<LatencyLog>) -> Self {
+        self.latency_log = log;
+        self
     }
 
     fn health(&self) -> MutexGuard<'_, Health> {
@@ -187,10 +198,19 @@ impl Worker {
                 flush_errors.push(e.to_string());
             }
         }
+        let latency_log_rows = match self.latency_log.take().map(LatencyLog::finish) {
+            Some(Ok(rows)) => Some(rows),
+            Some(Err(e)) => {
+                flush_errors.push(e);
+                None
+            }
+            None => None,
+        };
         self.sync_counters();
         WorkerEnd {
             sinks: self.sinks,
             flush_errors,
+            latency_log_rows,
         }
     }
 
@@ -211,7 +231,9 @@ impl Worker {
 
     fn tick(&mut self, tick: &drivers::timeline::Tick, decoded_at: Instant) {
         self.estimates.clear();
+        let tick_start = Instant::now();
         self.tracker.tick(tick, &mut self.estimates);
+        let tick_end = Instant::now();
         let poses = TickPoses {
             tick,
             estimates: &self.estimates,
@@ -264,7 +286,19 @@ impl Worker {
         }
         drop(h);
         // The poses are out: start the next tick's work (its renders) in the time until it arrives.
+        let prepare_start = Instant::now();
         self.tracker.prepare_next_tick();
+        if let Some(log) = &mut self.latency_log {
+            log.record(&TickTiming {
+                t_us: tick.t_us,
+                depth: tick.depth_frame.is_some(),
+                waited: tick_start.saturating_duration_since(decoded_at),
+                tick: tick_end - tick_start,
+                sinks: total.saturating_sub(tick_end.saturating_duration_since(decoded_at)),
+                latency: total,
+                prepare: prepare_start.elapsed(),
+            });
+        }
     }
 }
 

@@ -43,6 +43,10 @@ pub struct DemoArgs {
     /// Do not publish over zenoh.
     #[arg(long)]
     pub no_zenoh: bool,
+    /// Also write a per-tick latency log (CSV: tick time, depth tick, waited / tick / sinks / latency / prepare
+    /// microseconds) to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub latency_log: Option<PathBuf>,
 }
 
 /// Writes an image strip of six overlays (reconstructed intensity `I_t` with the model outline at the published
@@ -89,6 +93,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     if args.no_zenoh {
         config.sinks.zenoh = false;
     }
+    if let Some(p) = &args.latency_log {
+        config.output.latency_log = Some(session::from_working_dir(p)?);
+    }
     config.validate("eventtrack6d demo")?;
     let cache = args
         .cache_dir
@@ -132,5 +139,6 @@ pub fn run(args: &DemoArgs) -> Result<()> {
             log.display()
         );
     }
+    session::print_latency_log(&summary);
     Ok(())
 }

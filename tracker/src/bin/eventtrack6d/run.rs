@@ -23,11 +23,18 @@ pub struct RunArgs {
     /// Do not score the poses against the recording's ground truth at the end.
     #[arg(long)]
     pub no_accuracy: bool,
+    /// Also write a per-tick latency log (CSV: tick time, depth tick, waited / tick / sinks / latency / prepare
+    /// microseconds) to FILE; overrides `[output] latency_log`.
+    #[arg(long, value_name = "FILE")]
+    pub latency_log: Option<PathBuf>,
 }
 
 /// Runs the command.
 pub fn run(args: &RunArgs) -> Result<()> {
     let mut config = Config::load(&args.config)?;
+    if let Some(p) = &args.latency_log {
+        config.output.latency_log = Some(session::from_working_dir(p)?);
+    }
     if config.source.kind == SourceKind::Demo {
         let cache = args
             .cache_dir
@@ -49,5 +56,6 @@ pub fn run(args: &RunArgs) -> Result<()> {
         let rows = session::accuracy(rec, csv)?;
         session::print_accuracy(&rows, &config.tracker.method);
     }
+    session::print_latency_log(&summary);
     Ok(())
 }

@@ -87,3 +87,22 @@ pub fn print_accuracy(rows: &[(String, tracker::eval::Summary)], method: &str) {
         );
     }
 }
+
+/// `path` (from the command line) made absolute against the working directory, so that a configuration's
+/// `output.dir` does not move it.
+pub fn from_working_dir(path: &Path) -> Result<std::path::PathBuf> {
+    Ok(std::env::current_dir()
+        .context("reading the working directory")?
+        .join(path))
+}
+
+/// Prints where the per-tick latency log went, when one was kept.
+pub fn print_latency_log(summary: &Summary) {
+    if let Some(log) = &summary.outputs.latency_log {
+        println!(
+            "latency log:     {} (one row per tick: {})",
+            log.display(),
+            runtime::LATENCY_LOG_HEADER
+        );
+    }
+}

@@ -300,12 +300,15 @@ impl Default for StatusConfig {
 pub struct OutputConfig {
     /// Directory of the file outputs (`poses.csv`, `poses.candump.log`; created).
     pub dir: PathBuf,
+    /// Per-tick latency log (CSV, [`crate::runtime::LATENCY_LOG_HEADER`]), relative to `dir`; off when unset.
+    pub latency_log: Option<PathBuf>,
 }
 
 impl Default for OutputConfig {
     fn default() -> Self {
         Self {
             dir: PathBuf::from("eventtrack6d-out"),
+            latency_log: None,
         }
     }
 }
