@@ -50,6 +50,7 @@ impl EventTrack6d {
                 continue;
             }
             if !foreground_ready {
+                r.catch_up(&self.depth);
                 r.foreground.clear();
                 let noise = self.config.depth_term;
                 let margin = |z: f64| {

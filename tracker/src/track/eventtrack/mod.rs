@@ -128,6 +128,9 @@ pub struct EventTrack6d {
 /// Re-detection state shared by all objects: the learned background and reused buffers.
 struct Redetection {
     background: DepthBackground,
+    /// The depth frame the tracker holds was used at a tick but is not folded into `background` yet: folding it
+    /// waits until the background is read, the tick's poses are out, or the frame is replaced, whichever is first.
+    background_behind: bool,
     foreground: Vec<Point3<f64>>,
     seeds: Vec<(usize, Point3<f64>)>,
     centres: Vec<Cluster>,
@@ -141,6 +144,16 @@ struct Redetection {
     results: Vec<PlaceResult>,
     /// Scratch tracks for the checks, one set per renderer (thread).
     probes: Vec<ProbeSet>,
+}
+
+impl Redetection {
+    /// Folds `frame`, the depth frame of the latest depth tick, into the background if it is not yet.
+    fn catch_up(&mut self, frame: &DepthFrame) {
+        if self.background_behind {
+            self.background.update(frame);
+            self.background_behind = false;
+        }
+    }
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -249,6 +262,7 @@ impl EventTrack6d {
         let cell = config.redetect.cell_px.max(1);
         let redetection = Redetection {
             background: DepthBackground::new(cell, depth_cam.width, depth_cam.height),
+            background_behind: false,
             foreground: Vec::with_capacity(
                 (depth_cam.width / cell) as usize * (depth_cam.height / cell) as usize,
             ),
@@ -386,6 +400,11 @@ impl EventTrack6d {
         }
     }
 
+    /// Folds the depth frame of the latest depth tick into the re-detection background, if it is not yet.
+    fn catch_up_background(&mut self) {
+        self.redetection.catch_up(&self.depth);
+    }
+
     /// Whether any object refines at this tick (the `depth30` baseline refines only at depth exposures).
     fn refines(&self, depth_now: bool) -> bool {
         self.config.depth != DepthUse::DepthFramesOnly || depth_now
@@ -404,6 +423,7 @@ impl PoseTracker for EventTrack6d {
     }
 
     fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
+        self.catch_up_background();
         if self.depth_t_us.is_some() {
             self.counters.depth_frames_unused += 1;
         }
@@ -441,7 +461,8 @@ impl PoseTracker for EventTrack6d {
         let refines = self.refines(depth_now);
         if refines && self.config.redetect.enabled {
             if depth_now {
-                self.redetection.background.update(&self.depth);
+                // Off the tick's latency unless planning reads it (the frame is cold in cache in a live run).
+                self.redetection.background_behind = true;
                 self.plan_redetection(t_us);
             }
             self.continue_redetection(dt_s);
@@ -483,6 +504,7 @@ impl PoseTracker for EventTrack6d {
     }
 
     fn prepare_next_tick(&mut self) {
+        self.catch_up_background();
         if self.config.prefetch_renders && self.refines(false) {
             let (times, count) = self.next_tick.candidates();
             for &t in &times[..count] {
