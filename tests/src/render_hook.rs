@@ -54,6 +54,10 @@ impl<G: 'static> Renderer for HookedRenderer<G> {
         self.inner.prefetch_counts()
     }
 
+    fn forget_prefetched(&mut self) {
+        self.inner.forget_prefetched();
+    }
+
     fn renders_ahead(&self) -> bool {
         self.inner.renders_ahead()
     }

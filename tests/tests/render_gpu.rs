@@ -633,4 +633,25 @@ fn a_prefetched_render_is_taken_only_by_the_identical_request() {
     assert_eq!(counts.started, 2 + 10);
     // The last 8 (the slots) were taken; the first 2 were replaced before their request came.
     assert_eq!(counts.used, 2 + 8);
+
+    // A forgotten prefetch is not taken, even by its own request, which renders again (the same image).
+    assert!(
+        gpu.prefetch_roi(&scene, &cam, &roi_of(&p0))
+            .expect("prefetch")
+    );
+    gpu.forget_prefetched();
+    gpu.render_roi(&scene, &cam, &roi_of(&p0), &mut taken)
+        .expect("render");
+    assert_same_image(
+        &taken,
+        &expected0,
+        "request after its prefetch was forgotten",
+    );
+    assert_eq!(
+        gpu.prefetch_counts(),
+        PrefetchCounts {
+            started: 2 + 10 + 1,
+            used: 2 + 8
+        }
+    );
 }

@@ -182,6 +182,11 @@ pub trait Renderer {
         Ok(false)
     }
 
+    /// Gives up the renders started ahead that no request took yet: no later request will (the tracker calls it
+    /// before it prefetches the next tick's renders), so their buffers can be reused for the next ones instead of
+    /// new ones being made. The default has nothing to give up.
+    fn forget_prefetched(&mut self) {}
+
     /// Whether [`Self::prefetch_roi`] starts renders (the GPU backend, [`RenderAhead`]). The tracker wraps a
     /// renderer that does not in a [`RenderAhead`] when it prefetches renders.
     fn renders_ahead(&self) -> bool {

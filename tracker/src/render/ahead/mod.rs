@@ -264,6 +264,13 @@ impl Renderer for RenderAhead {
         self.counts
     }
 
+    fn forget_prefetched(&mut self) {
+        // A job still on the helper thread frees its slot when it comes back.
+        for slot in &mut self.slots {
+            slot.holds = false;
+        }
+    }
+
     fn renders_ahead(&self) -> bool {
         true
     }

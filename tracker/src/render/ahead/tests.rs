@@ -213,3 +213,62 @@ fn a_mesh_added_after_rendering_ahead_is_known_to_the_next_render_ahead() {
     assert!(got.mask().contains(&2));
     assert_eq!(ahead.prefetch_counts().used, 1);
 }
+
+#[test]
+fn forgotten_renders_ahead_are_not_taken_and_their_slots_are_reused() {
+    let (mut ahead, mut plain, mesh, camera, roi) = setup();
+    let (mut got, mut want) = (RenderTarget::new(), RenderTarget::new());
+    // Rounds as the tracker makes them: two renders ahead, one taken, the rest forgotten before the next round.
+    for k in 0..20 {
+        let at = |x: f64| {
+            [SceneObject {
+                mesh,
+                pose: pose(x, 0.05 * k as f64),
+                id: 1,
+            }]
+        };
+        let (taken, other) = (at(0.001), at(0.002));
+        ahead.forget_prefetched();
+        for s in [&taken, &other] {
+            assert!(
+                ahead
+                    .prefetch_roi(&Scene::objects(s).geometry_only(), &camera, &roi)
+                    .expect("prefetch")
+            );
+        }
+        let scene = Scene::objects(&taken).geometry_only();
+        ahead
+            .render_roi(&scene, &camera, &roi, &mut got)
+            .expect("render");
+        plain
+            .render_roi(&scene, &camera, &roi, &mut want)
+            .expect("render");
+        assert!(same(&got, &want));
+    }
+    assert_eq!(
+        ahead.prefetch_counts(),
+        PrefetchCounts {
+            started: 40,
+            used: 20
+        }
+    );
+    // Two slots per round, and at most one more while a forgotten render is still on the helper thread.
+    assert!(ahead.slots.len() <= 3, "{} slots", ahead.slots.len());
+    // A forgotten render is not taken, even by its own request.
+    let objects = [SceneObject {
+        mesh,
+        pose: pose(0.0, 1.0),
+        id: 1,
+    }];
+    let scene = Scene::objects(&objects).geometry_only();
+    assert!(ahead.prefetch_roi(&scene, &camera, &roi).expect("prefetch"));
+    ahead.forget_prefetched();
+    ahead
+        .render_roi(&scene, &camera, &roi, &mut got)
+        .expect("render");
+    plain
+        .render_roi(&scene, &camera, &roi, &mut want)
+        .expect("render");
+    assert!(same(&got, &want));
+    assert_eq!(ahead.prefetch_counts().used, 20);
+}

@@ -370,6 +370,13 @@ impl Renderer for GpuRenderer {
         self.counts
     }
 
+    fn forget_prefetched(&mut self) {
+        // A slot's unpacking may still run; reusing the slot waits for it (`settle`).
+        for slot in &mut self.prefetched {
+            slot.holds_render = false;
+        }
+    }
+
     fn renders_ahead(&self) -> bool {
         true
     }

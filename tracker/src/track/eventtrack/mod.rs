@@ -506,6 +506,8 @@ impl PoseTracker for EventTrack6d {
     fn prepare_next_tick(&mut self) {
         self.catch_up_background();
         if self.config.prefetch_renders && self.refines(false) {
+            // What the last tick did not take, the next one will not either.
+            self.renderer.forget_prefetched();
             let (times, count) = self.next_tick.candidates();
             for &t in &times[..count] {
                 self.prefetch_next(t);
