@@ -200,16 +200,6 @@ impl Renderer for RenderAhead {
         self.inner.render(scene, camera, target)
     }
 
-    fn render_roi(
-        &mut self,
-        scene: &Scene<'_>,
-        camera: &PinholeCamera,
-        roi: &Roi,
-        target: &mut RenderTarget,
-    ) -> Result<(), RenderError> {
-        self.render(scene, &camera.crop(roi), target)
-    }
-
     fn prefetch_roi(
         &mut self,
         scene: &Scene<'_>,

@@ -59,6 +59,26 @@ fn setup() -> (RenderAhead, CpuRenderer, MeshId, PinholeCamera, Roi) {
     (ahead, plain, mesh, camera, roi)
 }
 
+/// Renders `scene`'s ROI with `ahead` and with `plain`, asserts the two images are identical, and returns
+/// `ahead`'s.
+fn render_both(
+    ahead: &mut RenderAhead,
+    plain: &mut CpuRenderer,
+    scene: &Scene<'_>,
+    camera: &PinholeCamera,
+    roi: &Roi,
+) -> RenderTarget {
+    let (mut got, mut want) = (RenderTarget::new(), RenderTarget::new());
+    ahead
+        .render_roi(scene, camera, roi, &mut got)
+        .expect("render");
+    plain
+        .render_roi(scene, camera, roi, &mut want)
+        .expect("render");
+    assert!(same(&got, &want));
+    got
+}
+
 fn same(a: &RenderTarget, b: &RenderTarget) -> bool {
     a.width() == b.width()
         && a.height() == b.height()
@@ -87,24 +107,11 @@ fn a_render_ahead_is_taken_only_by_the_identical_request_and_matches_a_plain_ren
         pose: pose(1e-9, 0.3),
         ..objects[0]
     }];
-    let (mut got, mut want) = (RenderTarget::new(), RenderTarget::new());
     // A different pose (by a nanometre) renders on request and leaves the render ahead in place.
-    ahead
-        .render_roi(
-            &Scene::objects(&moved).geometry_only(),
-            &camera,
-            &roi,
-            &mut got,
-        )
-        .expect("render");
+    let moved_scene = Scene::objects(&moved).geometry_only();
+    render_both(&mut ahead, &mut plain, &moved_scene, &camera, &roi);
     assert_eq!(ahead.prefetch_counts().used, 0);
-    ahead
-        .render_roi(&scene, &camera, &roi, &mut got)
-        .expect("render");
-    plain
-        .render_roi(&scene, &camera, &roi, &mut want)
-        .expect("render");
-    assert!(same(&got, &want));
+    let got = render_both(&mut ahead, &mut plain, &scene, &camera, &roi);
     assert!(got.mask().contains(&1));
     assert_eq!(
         ahead.prefetch_counts(),
@@ -114,10 +121,7 @@ fn a_render_ahead_is_taken_only_by_the_identical_request_and_matches_a_plain_ren
         }
     );
     // Taken once: the same request again renders on request.
-    ahead
-        .render_roi(&scene, &camera, &roi, &mut got)
-        .expect("render");
-    assert!(same(&got, &want));
+    render_both(&mut ahead, &mut plain, &scene, &camera, &roi);
     assert_eq!(ahead.prefetch_counts().used, 1);
 }
 
@@ -141,16 +145,9 @@ fn more_renders_ahead_than_slots_replace_the_oldest_and_every_taken_one_is_right
                 .expect("prefetch")
         );
     }
-    let (mut got, mut want) = (RenderTarget::new(), RenderTarget::new());
     for s in scenes.iter().rev() {
         let scene = Scene::objects(s).geometry_only();
-        ahead
-            .render_roi(&scene, &camera, &roi, &mut got)
-            .expect("render");
-        plain
-            .render_roi(&scene, &camera, &roi, &mut want)
-            .expect("render");
-        assert!(same(&got, &want));
+        render_both(&mut ahead, &mut plain, &scene, &camera, &roi);
     }
     // The three oldest were replaced before anyone asked; the rest were taken.
     assert_eq!(
@@ -202,14 +199,7 @@ fn a_mesh_added_after_rendering_ahead_is_known_to_the_next_render_ahead() {
     }];
     let scene = Scene::objects(&objects);
     assert!(ahead.prefetch_roi(&scene, &camera, &roi).expect("prefetch"));
-    let (mut got, mut want) = (RenderTarget::new(), RenderTarget::new());
-    ahead
-        .render_roi(&scene, &camera, &roi, &mut got)
-        .expect("render");
-    plain
-        .render_roi(&scene, &camera, &roi, &mut want)
-        .expect("render");
-    assert!(same(&got, &want));
+    let got = render_both(&mut ahead, &mut plain, &scene, &camera, &roi);
     assert!(got.mask().contains(&2));
     assert_eq!(ahead.prefetch_counts().used, 1);
 }
@@ -217,7 +207,6 @@ fn a_mesh_added_after_rendering_ahead_is_known_to_the_next_render_ahead() {
 #[test]
 fn forgotten_renders_ahead_are_not_taken_and_their_slots_are_reused() {
     let (mut ahead, mut plain, mesh, camera, roi) = setup();
-    let (mut got, mut want) = (RenderTarget::new(), RenderTarget::new());
     // Rounds as the tracker makes them: two renders ahead, one taken, the rest forgotten before the next round.
     for k in 0..20 {
         let at = |x: f64| {
@@ -237,13 +226,7 @@ fn forgotten_renders_ahead_are_not_taken_and_their_slots_are_reused() {
             );
         }
         let scene = Scene::objects(&taken).geometry_only();
-        ahead
-            .render_roi(&scene, &camera, &roi, &mut got)
-            .expect("render");
-        plain
-            .render_roi(&scene, &camera, &roi, &mut want)
-            .expect("render");
-        assert!(same(&got, &want));
+        render_both(&mut ahead, &mut plain, &scene, &camera, &roi);
     }
     assert_eq!(
         ahead.prefetch_counts(),
@@ -263,12 +246,6 @@ fn forgotten_renders_ahead_are_not_taken_and_their_slots_are_reused() {
     let scene = Scene::objects(&objects).geometry_only();
     assert!(ahead.prefetch_roi(&scene, &camera, &roi).expect("prefetch"));
     ahead.forget_prefetched();
-    ahead
-        .render_roi(&scene, &camera, &roi, &mut got)
-        .expect("render");
-    plain
-        .render_roi(&scene, &camera, &roi, &mut want)
-        .expect("render");
-    assert!(same(&got, &want));
+    render_both(&mut ahead, &mut plain, &scene, &camera, &roi);
     assert_eq!(ahead.prefetch_counts().used, 20);
 }
