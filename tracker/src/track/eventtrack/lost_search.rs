@@ -3,12 +3,15 @@
 //! place tried with a depth-only refinement against that frame.
 
 use super::EventTrack6d;
-use super::place_check::PlaceCheck;
+use super::place_check::{PlaceCheck, PlaceResult, ProbeSet};
+use crate::geometry::PinholeCamera;
 use crate::track::TrackingState;
-use crate::track::config::DepthUse;
+use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::object::TickInputs;
-use crate::track::redetect::cluster_centres;
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use crate::track::redetect::{Cluster, DepthBackground, cluster_centres};
+use drivers::recording::DepthFrame;
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use std::collections::VecDeque;
 
 /// One place to check for one object.
 #[derive(Debug, Clone, Copy)]
@@ -29,6 +32,64 @@ pub(super) struct Search {
     best: Option<(f64, Isometry3<f64>)>,
     /// Places still pending.
     remaining: usize,
+}
+
+/// Re-detection state shared by all objects: the learned background and reused buffers.
+pub(super) struct Redetection {
+    pub(super) background: DepthBackground,
+    /// The depth frame the tracker holds was used at a tick but is not folded into `background` yet: folding it
+    /// waits until the background is read, the tick's poses are out, or the frame is replaced, whichever is first.
+    pub(super) background_behind: bool,
+    pub(super) foreground: Vec<Point3<f64>>,
+    pub(super) seeds: Vec<(usize, Point3<f64>)>,
+    pub(super) centres: Vec<Cluster>,
+    /// Places still to check, in order, against the depth frame `frame` (index, tick time in microseconds).
+    pub(super) pending: VecDeque<PendingPlace>,
+    pub(super) frame: Option<(u64, i64)>,
+    /// Per object: the search's results so far.
+    pub(super) searches: Vec<Search>,
+    /// The places being checked at this tick and their results.
+    pub(super) checks: Vec<PendingPlace>,
+    pub(super) results: Vec<PlaceResult>,
+    /// Scratch tracks for the checks, one set per renderer (thread).
+    pub(super) probes: Vec<ProbeSet>,
+}
+
+impl Redetection {
+    /// Empty re-detection state for `objects` objects seen by the depth camera `depth_cam`, with `probes` (one
+    /// set per renderer) to check places in.
+    pub(super) fn new(
+        config: &TrackerConfig,
+        objects: usize,
+        depth_cam: &PinholeCamera,
+        probes: Vec<ProbeSet>,
+    ) -> Self {
+        let places = objects * (1 + 2 * config.redetect.candidates);
+        let cell = config.redetect.cell_px.max(1);
+        Self {
+            background: DepthBackground::new(cell, depth_cam.width, depth_cam.height),
+            background_behind: false,
+            foreground: Vec::with_capacity(
+                (depth_cam.width / cell) as usize * (depth_cam.height / cell) as usize,
+            ),
+            seeds: Vec::with_capacity(128),
+            centres: Vec::with_capacity(config.redetect.candidates),
+            pending: VecDeque::with_capacity(places),
+            frame: None,
+            searches: vec![Search::default(); objects],
+            checks: Vec::with_capacity(places),
+            results: Vec::with_capacity(places),
+            probes,
+        }
+    }
+
+    /// Folds `frame`, the depth frame of the latest depth tick, into the background if it is not yet.
+    pub(super) fn catch_up(&mut self, frame: &DepthFrame) {
+        if self.background_behind {
+            self.background.update(frame);
+            self.background_behind = false;
+        }
+    }
 }
 
 impl EventTrack6d {

@@ -1,109 +1,31 @@
 //! EventTrack6D: several objects tracked together from events and depth, each refined by render-and-compare in
 //! its own ROI, with mutual occlusion through the other objects' rendered masks.
 
+mod counters;
 mod lost_search;
 mod next_tick;
 mod place_check;
+mod setup;
 mod step;
+
+pub use counters::TrackerCounters;
+pub use setup::{TrackError, TrackedObject, TrackingRig};
 
 use super::config::{DepthUse, TrackerConfig};
 use super::object::{ObjectTrack, TickInputs};
-use super::redetect::{Cluster, DepthBackground};
 use super::{DepthFallbackCheck, PoseEstimate, PoseTracker, TrackingState};
-use lost_search::{PendingPlace, Search};
+use lost_search::Redetection;
 use next_tick::NextTick;
-use place_check::{PlaceResult, ProbeSet};
+use place_check::ProbeSet;
 use step::ObjectStep;
 
-use crate::geometry::{PinholeCamera, se3};
-use crate::mesh::{Mesh, Symmetry};
-use crate::recon::{DepthRig, EventSurface};
-use crate::render::{RenderAhead, RenderError, Renderer, Scene, SceneObject};
+use crate::geometry::se3;
+use crate::recon::EventSurface;
+use crate::render::{RenderAhead, Renderer, Scene, SceneObject};
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
-use nalgebra::{Isometry3, Point3, Vector3};
-use std::collections::VecDeque;
-use std::sync::Arc;
-
-/// Why a tracker could not be built.
-#[derive(Debug, thiserror::Error)]
-pub enum TrackError {
-    /// No object to track.
-    #[error("no object to track")]
-    NoObjects,
-    /// Too many objects for the renderer's mask labels.
-    #[error("{0} objects: at most 65534 can be tracked")]
-    TooManyObjects(usize),
-    /// An object's first pose is unusable.
-    #[error("object {object}: first pose is {reason}")]
-    BadFirstPose {
-        /// Object name.
-        object: String,
-        /// What is wrong.
-        reason: &'static str,
-    },
-    /// The renderer refused a mesh or could not render the object's first ROI.
-    #[error("object {object}: {source}")]
-    Render {
-        /// Object name.
-        object: String,
-        /// The renderer's error.
-        source: RenderError,
-    },
-}
-
-/// An object to track: name, model and first pose.
-#[derive(Debug, Clone)]
-pub struct TrackedObject {
-    /// Name (as in the recording's ground truth and on the wire).
-    pub name: String,
-    /// The CAD model, metres.
-    pub mesh: Arc<Mesh>,
-    /// Diameter, metres (from `models_info.json`, or the mesh's own).
-    pub diameter: f64,
-    /// Time of the first pose, microseconds on the event camera's clock.
-    pub first_t_us: i64,
-    /// First pose `T_cam_obj`, event camera frame.
-    pub first_pose: Isometry3<f64>,
-    /// Shape symmetries (object frame, from `models_info.json`; empty when unknown). A rotation about a continuous
-    /// symmetry axis is invisible in shape, so the tracker keeps no spin about such an axis in its velocity.
-    pub symmetries: Vec<Symmetry>,
-}
-
-/// The cameras a tracker works with.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrackingRig {
-    /// Event camera intrinsics (poses are in this camera's frame).
-    pub event_camera: PinholeCamera,
-    /// Depth camera and its extrinsics.
-    pub depth: DepthRig,
-}
-
-/// Counters of what the tracker did.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct TrackerCounters {
-    /// Ticks processed.
-    pub ticks: u64,
-    /// Depth frames used.
-    pub depth_frames: u64,
-    /// Depth frames that arrived without a matching tick and were replaced before use.
-    pub depth_frames_unused: u64,
-    /// Renders that failed (the object keeps its prediction for that tick).
-    pub render_errors: u64,
-    /// Depth frames at which the depth-only hypothesis replaced an object's event-driven estimate (all objects).
-    pub depth_fallbacks: u64,
-    /// Depth frames at which re-detection moved an object that was not `tracking` (all objects).
-    pub redetections: u64,
-    /// Re-detection places checked (each a depth-only refinement and two renders).
-    pub redetect_places_checked: u64,
-    /// Re-detection places left unchecked because a newer depth frame replaced the one they were planned on.
-    pub redetect_places_dropped: u64,
-    /// Renders started at the end of a tick for the next one ([`TrackerConfig::prefetch_renders`]).
-    pub renders_prefetched: u64,
-    /// Of them, renders the next tick took (the others were rendered again: its request differed).
-    pub prefetched_renders_used: u64,
-}
+use nalgebra::{Isometry3, Vector3};
 
 /// The EventTrack6D tracker (and, through [`super::TrackingMethod`], its baselines).
 pub struct EventTrack6d {
@@ -123,37 +45,6 @@ pub struct EventTrack6d {
     next_tick: NextTick,
     counters: TrackerCounters,
     redetection: Redetection,
-}
-
-/// Re-detection state shared by all objects: the learned background and reused buffers.
-struct Redetection {
-    background: DepthBackground,
-    /// The depth frame the tracker holds was used at a tick but is not folded into `background` yet: folding it
-    /// waits until the background is read, the tick's poses are out, or the frame is replaced, whichever is first.
-    background_behind: bool,
-    foreground: Vec<Point3<f64>>,
-    seeds: Vec<(usize, Point3<f64>)>,
-    centres: Vec<Cluster>,
-    /// Places still to check, in order, against the depth frame `frame` (index, tick time in microseconds).
-    pending: VecDeque<PendingPlace>,
-    frame: Option<(u64, i64)>,
-    /// Per object: the search's results so far.
-    searches: Vec<Search>,
-    /// The places being checked at this tick and their results.
-    checks: Vec<PendingPlace>,
-    results: Vec<PlaceResult>,
-    /// Scratch tracks for the checks, one set per renderer (thread).
-    probes: Vec<ProbeSet>,
-}
-
-impl Redetection {
-    /// Folds `frame`, the depth frame of the latest depth tick, into the background if it is not yet.
-    fn catch_up(&mut self, frame: &DepthFrame) {
-        if self.background_behind {
-            self.background.update(frame);
-            self.background_behind = false;
-        }
-    }
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -256,25 +147,9 @@ impl EventTrack6d {
         } else {
             Vec::new()
         };
-        let places = objects_len * (1 + 2 * config.redetect.candidates);
-        let cam = rig.event_camera;
         let depth_cam = rig.depth.camera;
-        let cell = config.redetect.cell_px.max(1);
-        let redetection = Redetection {
-            background: DepthBackground::new(cell, depth_cam.width, depth_cam.height),
-            background_behind: false,
-            foreground: Vec::with_capacity(
-                (depth_cam.width / cell) as usize * (depth_cam.height / cell) as usize,
-            ),
-            seeds: Vec::with_capacity(128),
-            centres: Vec::with_capacity(config.redetect.candidates),
-            pending: VecDeque::with_capacity(places),
-            frame: None,
-            searches: vec![Search::default(); objects_len],
-            checks: Vec::with_capacity(places),
-            results: Vec::with_capacity(places),
-            probes,
-        };
+        let redetection = Redetection::new(&config, objects_len, &depth_cam, probes);
+        let cam = rig.event_camera;
         // `I_t` is reconstructed only where something reads it: the event term needs the latest times alone.
         let surface = if config.intensity.always || config.intensity_term.weight > 0.0 {
             EventSurface::new(cam.width, cam.height, config.intensity)

@@ -1,0 +1,26 @@
+//! What the tracker counts while it runs (in `track`'s closing lines, the runtime summary and its status).
+
+/// Counters of what the tracker did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct TrackerCounters {
+    /// Ticks processed.
+    pub ticks: u64,
+    /// Depth frames used.
+    pub depth_frames: u64,
+    /// Depth frames that arrived without a matching tick and were replaced before use.
+    pub depth_frames_unused: u64,
+    /// Renders that failed (the object keeps its prediction for that tick).
+    pub render_errors: u64,
+    /// Depth frames at which the depth-only hypothesis replaced an object's event-driven estimate (all objects).
+    pub depth_fallbacks: u64,
+    /// Depth frames at which re-detection moved an object that was not `tracking` (all objects).
+    pub redetections: u64,
+    /// Re-detection places checked (each a depth-only refinement and two renders).
+    pub redetect_places_checked: u64,
+    /// Re-detection places left unchecked because a newer depth frame replaced the one they were planned on.
+    pub redetect_places_dropped: u64,
+    /// Renders started at the end of a tick for the next one ([`TrackerConfig::prefetch_renders`]).
+    pub renders_prefetched: u64,
+    /// Of them, renders the next tick took (the others were rendered again: its request differed).
+    pub prefetched_renders_used: u64,
+}
