@@ -1,10 +1,17 @@
 //! EventTrack6D with the CPU renderer on a replayed mug shake: with `prefetch_renders` (the default) each next
 //! ROI is rendered ahead on the `render-ahead` helper thread, most ticks take that render, and no pose, state or
-//! quality changes; without it the tracker renders on its own thread only.
+//! quality changes; without it the tracker renders on its own thread only. With several object threads, each
+//! renders its own objects ahead.
 
+use drivers::recording::Recording;
 use eventtrack6d_tests::tick_fixture::{EstimateBits, mug_recording, replay_bits};
-use tracker::render::CpuRenderer;
-use tracker::track::{TrackerConfig, TrackerCounters, TrackingMethod};
+use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
+use hil_sim::motion::{MotionProfile, SpeedLevel};
+use hil_sim::objects::ObjectKind;
+use tracker::render::{CpuRenderer, RendererKind};
+use tracker::runtime::build_tracker;
+use tracker::runtime::setup::recording_scene;
+use tracker::track::{TrackerConfig, TrackerCounters, TrackingMethod, track_recording};
 
 fn replay(config: TrackerConfig) -> (Vec<EstimateBits>, TrackerCounters) {
     let dir = std::env::temp_dir().join("eventtrack6d-tracker-ahead-test");
@@ -45,4 +52,77 @@ fn depth30_renders_nothing_ahead() {
     let (_, counters) = replay(config);
     assert!(counters.ticks > 50);
     assert_eq!(counters.renders_prefetched, 0);
+}
+
+/// Every estimate's bits and the counters of a two-object replay (a mug shaken behind a can) stepped on two
+/// threads (`object_threads = 2`), with or without renders ahead.
+fn replay_two_objects(prefetch: bool) -> (Vec<(i64, usize, [u64; 7])>, TrackerCounters) {
+    let dir = std::env::temp_dir().join("eventtrack6d-tracker-ahead-two-objects");
+    if Recording::open(&dir).is_err() {
+        let mut gen_cfg = GenerateConfig::new(
+            ObjectSource::Library(ObjectKind::Mug),
+            MotionProfile::Shake,
+            SpeedLevel::Moderate,
+            0.5,
+            5,
+        );
+        gen_cfg.companions.push(
+            Companion::parse(
+                "can:translation",
+                0,
+                MotionProfile::Shake,
+                SpeedLevel::Moderate,
+            )
+            .expect("companion spec"),
+        );
+        generate(&gen_cfg, &dir, |_| {}).expect("generating the two-object recording");
+    }
+    let rec = Recording::open(&dir).expect("recording");
+    let scene = recording_scene(&rec, &[]).expect("scene");
+    let config = TrackerConfig {
+        prefetch_renders: prefetch,
+        object_threads: 2,
+        ..TrackerConfig::default()
+    };
+    let mut tracker =
+        build_tracker("eventtrack6d", RendererKind::Cpu, &config, &scene).expect("tracker");
+    let mut out = Vec::new();
+    track_recording(
+        &rec,
+        tracker.as_mut(),
+        scene.objects[0].first_pose.0,
+        |_, estimates, _| {
+            for e in estimates {
+                let (t, q) = (e.pose.translation.vector, e.pose.rotation.coords);
+                let bits = [t.x, t.y, t.z, q.x, q.y, q.z, q.w].map(f64::to_bits);
+                out.push((e.t_us, e.object, bits));
+            }
+        },
+        |_| {},
+    )
+    .expect("replay");
+    (out, tracker.tracker_counters().expect("counters"))
+}
+
+#[test]
+fn with_two_object_threads_each_renders_its_own_objects_ahead() {
+    let (with, counters) = replay_two_objects(true);
+    let (without, plain) = replay_two_objects(false);
+    assert_eq!(plain.renders_prefetched, 0);
+    assert_eq!(with.len(), without.len());
+    assert!(with.len() > 100, "{} estimates", with.len());
+    assert_eq!(with, without, "an estimate differs with renders ahead");
+    println!(
+        "{} ticks, {} renders ahead, {} used",
+        counters.ticks, counters.renders_prefetched, counters.prefetched_renders_used
+    );
+    // Both objects' renders are made ahead (one each per tick, two while the pattern of periods is unknown),
+    // and most are taken: the second thread's object too.
+    assert!(counters.renders_prefetched >= 2 * (counters.ticks - 1));
+    assert!(
+        counters.prefetched_renders_used * 10 >= 2 * counters.ticks * 9,
+        "{} of {} object steps took a render made ahead",
+        counters.prefetched_renders_used,
+        2 * counters.ticks
+    );
 }

@@ -265,7 +265,8 @@ impl Renderer for RenderAhead {
         true
     }
 
+    /// A renderer for another thread that renders ahead on its own helper thread.
     fn fork(&self) -> Option<Box<dyn Renderer + Send>> {
-        self.inner.fork()
+        Some(Box::new(Self::new(self.inner.fork()?)))
     }
 }

@@ -205,12 +205,14 @@ impl EventTrack6d {
 
     /// Counters since creation.
     pub fn counters(&self) -> TrackerCounters {
-        let prefetch = self.renderer.prefetch_counts();
+        let prefetch = std::iter::once(&self.renderer)
+            .chain(&self.workers)
+            .map(|r| r.prefetch_counts());
         TrackerCounters {
             depth_fallbacks: self.objects.iter().map(|o| o.fallbacks).sum(),
             redetections: self.objects.iter().map(|o| o.redetections).sum(),
-            renders_prefetched: prefetch.started,
-            prefetched_renders_used: prefetch.used,
+            renders_prefetched: prefetch.clone().map(|p| p.started).sum(),
+            prefetched_renders_used: prefetch.map(|p| p.used).sum(),
             ..self.counters
         }
     }
@@ -227,14 +229,22 @@ impl EventTrack6d {
             .geometry_only()
             .normals_on_surface_grid(self.config.max_surface_points);
         let camera = &self.rig.event_camera;
-        // Objects stepped by the other threads' renderers would not take a render made by this one.
-        let own = step::own_share(self.objects.len(), self.workers.len());
-        for (o, s) in self.objects.iter().zip(&self.scene).take(own) {
-            if next_t_us < o.t_us {
-                continue;
-            }
-            if let Some(roi) = o.roi_at(&s.pose, camera, &self.config, next_t_us, false) {
-                let _ = self.renderer.prefetch_roi(&scene, camera, &roi);
+        // Each object's render is made ahead by the renderer that will step it ([`ObjectStep::run_split`]).
+        let share = step::own_share(self.objects.len(), self.workers.len());
+        let renderers = std::iter::once(&mut self.renderer).chain(&mut self.workers);
+        for ((objects, poses), renderer) in self
+            .objects
+            .chunks(share.max(1))
+            .zip(self.scene.chunks(share.max(1)))
+            .zip(renderers)
+        {
+            for (o, s) in objects.iter().zip(poses) {
+                if next_t_us < o.t_us {
+                    continue;
+                }
+                if let Some(roi) = o.roi_at(&s.pose, camera, &self.config, next_t_us, false) {
+                    let _ = renderer.prefetch_roi(&scene, camera, &roi);
+                }
             }
         }
     }
@@ -383,6 +393,9 @@ impl PoseTracker for EventTrack6d {
         if self.config.prefetch_renders && self.refines(false) {
             // What the last tick did not take, the next one will not either.
             self.renderer.forget_prefetched();
+            for w in &mut self.workers {
+                w.forget_prefetched();
+            }
             let (times, count) = self.next_tick.candidates();
             for &t in &times[..count] {
                 self.prefetch_next(t);
