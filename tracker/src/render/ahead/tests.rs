@@ -50,7 +50,14 @@ fn pose(x: f64, angle: f64) -> Isometry3<f64> {
 }
 
 fn setup() -> (RenderAhead, CpuRenderer, MeshId, PinholeCamera, Roi) {
-    let mut ahead = RenderAhead::new(Box::new(CpuRenderer::new()));
+    setup_with(Box::new(CpuRenderer::new()))
+}
+
+/// A `RenderAhead` of `inner` and a plain CPU renderer, each with the cube registered, a camera and a ROI.
+fn setup_with(
+    inner: Box<dyn Renderer + Send>,
+) -> (RenderAhead, CpuRenderer, MeshId, PinholeCamera, Roi) {
+    let mut ahead = RenderAhead::new(inner);
     let mut plain = CpuRenderer::new();
     let mesh = ahead.add_mesh(cube()).expect("mesh");
     assert_eq!(plain.add_mesh(cube()).expect("mesh"), mesh);
@@ -248,4 +255,66 @@ fn forgotten_renders_ahead_are_not_taken_and_their_slots_are_reused() {
     ahead.forget_prefetched();
     render_both(&mut ahead, &mut plain, &scene, &camera, &roi);
     assert_eq!(ahead.prefetch_counts().used, 20);
+}
+
+/// Renders with a CPU renderer; its forks panic in every render.
+struct ForksPanic(CpuRenderer);
+
+/// A renderer that panics in every render.
+struct Panics;
+
+impl Renderer for Panics {
+    fn add_mesh(&mut self, _: Arc<Mesh>) -> Result<MeshId, RenderError> {
+        Ok(MeshId(0))
+    }
+    fn render(
+        &mut self,
+        _: &Scene<'_>,
+        _: &PinholeCamera,
+        _: &mut RenderTarget,
+    ) -> Result<(), RenderError> {
+        panic!("a render that panics");
+    }
+}
+
+impl Renderer for ForksPanic {
+    fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
+        self.0.add_mesh(mesh)
+    }
+    fn render(
+        &mut self,
+        scene: &Scene<'_>,
+        camera: &PinholeCamera,
+        target: &mut RenderTarget,
+    ) -> Result<(), RenderError> {
+        self.0.render(scene, camera, target)
+    }
+    fn fork(&self) -> Option<Box<dyn Renderer + Send>> {
+        Some(Box::new(Panics))
+    }
+}
+
+#[test]
+fn a_panic_on_the_helper_thread_is_caught_and_the_request_renders_on_the_callers_thread() {
+    let (mut ahead, mut plain, mesh, camera, roi) =
+        setup_with(Box::new(ForksPanic(CpuRenderer::new())));
+    for k in 0..3 {
+        let objects = [SceneObject {
+            mesh,
+            pose: pose(0.0, 0.1 * f64::from(k)),
+            id: 1,
+        }];
+        let scene = Scene::objects(&objects).geometry_only();
+        assert!(ahead.prefetch_roi(&scene, &camera, &roi).expect("prefetch"));
+        let got = render_both(&mut ahead, &mut plain, &scene, &camera, &roi);
+        assert!(got.mask().contains(&1));
+    }
+    // The helper thread survived each panic: every prefetch started, none was taken.
+    assert_eq!(
+        ahead.prefetch_counts(),
+        PrefetchCounts {
+            started: 3,
+            used: 0
+        }
+    );
 }
