@@ -31,8 +31,11 @@ fn run(recording: &Recording, threads: usize) -> (Vec<PoseEstimate>, usize) {
     let mut beside = mug.clone();
     beside.name = "beside".into();
     beside.first_pose = Translation3::new(-0.15, 0.0, 0.0) * pose;
+    // Renders made ahead would run on the `render-ahead` threads (tests/tests/tracker_render_ahead.rs): here every
+    // render is made by the thread that steps the object.
     let mut config = TrackerConfig {
         object_threads: threads,
+        prefetch_renders: false,
         ..TrackerConfig::default()
     };
     config.redetect.enabled = false;
