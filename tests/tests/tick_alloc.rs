@@ -51,8 +51,8 @@ fn steady_state_ticks_do_not_allocate() {
             })
             .collect();
         // Warm up every buffer (depth ticks and plain ticks), then count. A render made ahead that is still on the
-        // helper thread when the next round starts cannot lend its slot, so the pool (at most eight) can grow by
-        // one now and then: ten rounds let it settle.
+        // helper thread when the next round starts cannot lend its slot, so the pool (at most sixteen slots) can
+        // grow by one now and then: ten rounds let it settle.
         let mut depth_tick = s.last_tick;
         depth_tick.depth_frame = Some(s.depth.index);
         for _ in 0..10 {

@@ -144,7 +144,7 @@ fn more_renders_ahead_than_slots_replace_the_oldest_and_every_taken_one_is_right
             }]
         })
         .collect();
-    // Past the eighth, each prefetch replaces the oldest render (waiting for it if it is still being made).
+    // Past the last slot, each prefetch replaces the oldest render (waiting for it if it is still being made).
     for s in &scenes {
         assert!(
             ahead
