@@ -7,6 +7,7 @@ use drivers::timeline::Tick;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
+use nalgebra::Translation3;
 use std::path::Path;
 use tracker::eval::{PoseTrack, recording_ticks};
 use tracker::render::Renderer;
@@ -48,7 +49,18 @@ pub fn steady_tracker(
     config: TrackerConfig,
     renderer: Box<dyn Renderer + Send>,
 ) -> SteadyTracker {
-    let (mut tracker, first_t_us) = mug_tracker(&recording, config, renderer);
+    steady_tracker_of(recording, config, renderer, 1)
+}
+
+/// [`steady_tracker`] of `objects` objects: the recording's mug and `objects - 1` copies of it that are not there,
+/// 15 cm apart beside it (each steps, renders and is refined like the mug; they drift where nothing supports them).
+pub fn steady_tracker_of(
+    recording: Recording,
+    config: TrackerConfig,
+    renderer: Box<dyn Renderer + Send>,
+    objects: usize,
+) -> SteadyTracker {
+    let (mut tracker, first_t_us) = mug_tracker(&recording, config, renderer, objects);
     track_recording(&recording, &mut tracker, first_t_us, |_, _, _| {}, |_| {}).expect("replay");
     let ticks = recording_ticks(&recording).expect("ticks");
     let last_tick = *ticks.last().expect("ticks");
@@ -58,7 +70,7 @@ pub fn steady_tracker(
         .copied()
         .expect("depth frames");
     let depth = recording.depth_frame(depth_index).expect("depth frame");
-    assert_eq!(tracker.objects().len(), 1);
+    assert_eq!(tracker.objects().len(), objects.max(1));
     SteadyTracker {
         tracker,
         last_tick,
@@ -78,7 +90,7 @@ pub fn replay_bits(
     config: TrackerConfig,
     renderer: Box<dyn Renderer + Send>,
 ) -> (Vec<EstimateBits>, TrackerCounters) {
-    let (mut tracker, first_t_us) = mug_tracker(recording, config, renderer);
+    let (mut tracker, first_t_us) = mug_tracker(recording, config, renderer, 1);
     let mut out = Vec::new();
     track_recording(
         recording,
@@ -97,11 +109,13 @@ pub fn replay_bits(
     (out, tracker.counters())
 }
 
-/// A tracker of `recording`'s mug from its ground-truth pose at the first tick, and that tick's time (microseconds).
+/// A tracker of `recording`'s mug from its ground-truth pose at the first tick, with `objects - 1` copies of it
+/// beside it, and that tick's time (microseconds).
 fn mug_tracker(
     recording: &Recording,
     config: TrackerConfig,
     renderer: Box<dyn Renderer + Send>,
+    objects: usize,
 ) -> (EventTrack6d, i64) {
     let gt = recording
         .ground_truth
@@ -110,8 +124,15 @@ fn mug_tracker(
     let track = PoseTrack::from_samples(&gt, "mug");
     let first = recording_ticks(recording).expect("ticks")[0];
     let pose = track.interpolated_at(first.t_us).expect("first pose");
-    let object = recording_object(recording, "mug", first.t_us, pose).expect("model");
+    let mug = recording_object(recording, "mug", first.t_us, pose).expect("model");
+    let copies = (1..objects).map(|k| {
+        let mut copy = mug.clone();
+        copy.name = format!("mug-copy-{k}");
+        copy.first_pose = Translation3::new(-0.15 * k as f64, 0.0, 0.0) * pose;
+        copy
+    });
+    let all = std::iter::once(mug.clone()).chain(copies).collect();
     let rig = recording_rig(recording).expect("rig");
-    let tracker = EventTrack6d::new(config, rig, vec![object], renderer).expect("tracker");
+    let tracker = EventTrack6d::new(config, rig, all, renderer).expect("tracker");
     (tracker, first.t_us)
 }

@@ -1,8 +1,10 @@
 //! A tracker tick allocates nothing on the heap in steady state (DESIGN section 3): counted with a global
-//! allocator wrapper around the system allocator (every thread, so the `render-ahead` thread's renders count
-//! too), over event, depth and plain ticks, each followed by `prepare_next_tick` as in the runtime.
+//! allocator wrapper around the system allocator (every thread, so the `render-ahead` and object threads count
+//! too), over event, depth and plain ticks, each followed by `prepare_next_tick` as in the runtime, for one
+//! object and for two objects on two threads.
 
-use eventtrack6d_tests::tick_fixture::{mug_recording, steady_tracker};
+use drivers::recording::Recording;
+use eventtrack6d_tests::tick_fixture::{mug_recording, steady_tracker_of};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use tracker::render::CpuRenderer;
@@ -34,60 +36,76 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// Counts the heap allocations (every thread) of 11 steady-state ticks of a tracker of `objects` objects (the mug
+/// and copies of it beside it), each followed by `prepare_next_tick`, after warming every buffer up.
+fn allocations_of_steady_ticks(rec: &Recording, config: TrackerConfig, objects: usize) -> usize {
+    let mut s = steady_tracker_of(rec.clone(), config, Box::new(CpuRenderer::new()), objects);
+    let mut out = Vec::with_capacity(4 * objects);
+    let events: Vec<_> = (0..2000u16)
+        .map(|i| drivers::event::CdEvent {
+            t_us: s.last_tick.t_us,
+            x: 500 + i % 200,
+            y: 300 + i / 200,
+            polarity: i % 3 == 0,
+        })
+        .collect();
+    // Warm up every buffer (depth ticks and plain ticks), then count. A render made ahead that is still on the
+    // helper thread when the next round starts cannot lend its slot, so the pool (at most sixteen slots) can
+    // grow by one now and then: ten rounds let it settle.
+    let mut depth_tick = s.last_tick;
+    depth_tick.depth_frame = Some(s.depth.index);
+    for _ in 0..10 {
+        s.tracker.push_events(&events);
+        s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
+        out.clear();
+        s.tracker.tick(&depth_tick, &mut out);
+        s.tracker.prepare_next_tick();
+        out.clear();
+        s.tracker.tick(&s.last_tick, &mut out);
+        s.tracker.prepare_next_tick();
+    }
+    ALLOCATIONS.store(0, Ordering::SeqCst);
+    COUNTING.store(true, Ordering::SeqCst);
+    for k in 0..10 {
+        s.tracker.push_events(&events);
+        if k % 4 == 0 {
+            s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
+            out.clear();
+            s.tracker.tick(&depth_tick, &mut out);
+        } else {
+            out.clear();
+            s.tracker.tick(&s.last_tick, &mut out);
+        }
+        s.tracker.prepare_next_tick();
+    }
+    // Let the helpers finish what they were given while counting.
+    out.clear();
+    s.tracker.tick(&s.last_tick, &mut out);
+    COUNTING.store(false, Ordering::SeqCst);
+    assert_eq!(out.len(), objects);
+    ALLOCATIONS.load(Ordering::SeqCst)
+}
+
 #[test]
 fn steady_state_ticks_do_not_allocate() {
     let dir = tempfile::tempdir().unwrap();
     let rec = mug_recording(dir.path(), 0.25);
     for method in TrackingMethod::ALL {
         let config = method.configure(&TrackerConfig::default());
-        let mut s = steady_tracker(rec.clone(), config, Box::new(CpuRenderer::new()));
-        let mut out = Vec::with_capacity(4);
-        let events: Vec<_> = (0..2000u16)
-            .map(|i| drivers::event::CdEvent {
-                t_us: s.last_tick.t_us,
-                x: 500 + i % 200,
-                y: 300 + i / 200,
-                polarity: i % 3 == 0,
-            })
-            .collect();
-        // Warm up every buffer (depth ticks and plain ticks), then count. A render made ahead that is still on the
-        // helper thread when the next round starts cannot lend its slot, so the pool (at most sixteen slots) can
-        // grow by one now and then: ten rounds let it settle.
-        let mut depth_tick = s.last_tick;
-        depth_tick.depth_frame = Some(s.depth.index);
-        for _ in 0..10 {
-            s.tracker.push_events(&events);
-            s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
-            out.clear();
-            s.tracker.tick(&depth_tick, &mut out);
-            s.tracker.prepare_next_tick();
-            out.clear();
-            s.tracker.tick(&s.last_tick, &mut out);
-            s.tracker.prepare_next_tick();
-        }
-        ALLOCATIONS.store(0, Ordering::SeqCst);
-        COUNTING.store(true, Ordering::SeqCst);
-        for k in 0..10 {
-            s.tracker.push_events(&events);
-            if k % 4 == 0 {
-                s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
-                out.clear();
-                s.tracker.tick(&depth_tick, &mut out);
-            } else {
-                out.clear();
-                s.tracker.tick(&s.last_tick, &mut out);
-            }
-            s.tracker.prepare_next_tick();
-        }
-        // Let the helper finish what it was given while counting.
-        out.clear();
-        s.tracker.tick(&s.last_tick, &mut out);
-        COUNTING.store(false, Ordering::SeqCst);
-        let n = ALLOCATIONS.load(Ordering::SeqCst);
-        assert_eq!(out.len(), 1);
+        let n = allocations_of_steady_ticks(&rec, config, 1);
         assert_eq!(
             n, 0,
             "{method}: {n} heap allocations in 11 steady-state ticks"
         );
     }
+    // Two objects stepped on two threads (the object thread is started once and woken every tick).
+    let config = TrackerConfig {
+        object_threads: 2,
+        ..TrackerConfig::default()
+    };
+    let n = allocations_of_steady_ticks(&rec, config, 2);
+    assert_eq!(
+        n, 0,
+        "two objects on two threads: {n} heap allocations in 11 steady-state ticks"
+    );
 }

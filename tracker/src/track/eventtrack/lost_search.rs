@@ -246,6 +246,7 @@ impl EventTrack6d {
             &mut r.probes,
             self.renderer.as_mut(),
             &mut self.workers,
+            &mut self.threads,
         );
         for (place, result) in r.checks.iter().zip(&r.results) {
             let k = place.object;

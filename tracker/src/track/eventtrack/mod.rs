@@ -7,6 +7,7 @@ mod next_tick;
 mod place_check;
 mod setup;
 mod step;
+mod threads;
 
 pub use counters::TrackerCounters;
 pub use setup::{TrackError, TrackedObject, TrackingRig};
@@ -18,6 +19,7 @@ use lost_search::Redetection;
 use next_tick::NextTick;
 use place_check::ProbeSet;
 use step::ObjectStep;
+use threads::ObjectThreads;
 
 use crate::geometry::se3;
 use crate::recon::EventSurface;
@@ -35,6 +37,8 @@ pub struct EventTrack6d {
     renderer: Box<dyn Renderer + Send>,
     /// Forks of `renderer` for the threads that step objects beside the tracker's own ([`TrackerConfig::object_threads`]).
     workers: Vec<Box<dyn Renderer + Send>>,
+    /// The threads the workers step objects and check places on (started at the first tick that needs them).
+    threads: ObjectThreads,
     surface: EventSurface,
     objects: Vec<ObjectTrack>,
     scene: Vec<SceneObject>,
@@ -169,6 +173,7 @@ impl EventTrack6d {
             rig,
             renderer,
             workers,
+            threads: ObjectThreads::default(),
             objects: tracks,
             scene,
             depth_t_us: None,
@@ -372,8 +377,12 @@ impl PoseTracker for EventTrack6d {
             refines,
             depth_now,
         };
-        let render_errors =
-            step.run_split(&mut self.objects, self.renderer.as_mut(), &mut self.workers);
+        let render_errors = step.run_split(
+            &mut self.objects,
+            self.renderer.as_mut(),
+            &mut self.workers,
+            &mut self.threads,
+        );
         self.counters.render_errors += render_errors;
         if depth_now {
             self.counters.depth_frames += 1;

@@ -4,6 +4,7 @@
 //! shared inputs and writes only its probe and its result, so the split changes nothing in the results.
 
 use super::lost_search::PendingPlace;
+use super::threads::{ObjectThreads, SharedMut};
 use crate::geometry::PinholeCamera;
 use crate::render::{RenderTarget, Renderer, Scene, SceneObject};
 use crate::track::config::TrackerConfig;
@@ -108,7 +109,7 @@ impl PlaceCheck<'_> {
     }
 
     /// [`Self::run`] over all `places`: split into one share per renderer, `renderer` checking the first share on
-    /// this thread and each of `workers` one of the others on a scoped thread, each with its own probe set of
+    /// this thread and each of `workers` one of the others on one of `threads`, each with its own probe set of
     /// `sets` (one per renderer). Returns the failed renders.
     pub(super) fn run_split(
         &self,
@@ -117,32 +118,41 @@ impl PlaceCheck<'_> {
         sets: &mut [ProbeSet],
         renderer: &mut dyn Renderer,
         workers: &mut [Box<dyn Renderer + Send>],
+        threads: &mut ObjectThreads,
     ) -> u64 {
         let Some((own_set, other_sets)) = sets.split_first_mut() else {
             return 0;
         };
-        let threads = (1 + workers.len().min(other_sets.len())).min(places.len());
-        if threads <= 1 {
+        let parts = (1 + workers.len().min(other_sets.len())).min(places.len());
+        if parts <= 1 {
             return self.run(places, results, own_set, renderer);
         }
-        let per_thread = places.len().div_ceil(threads);
-        let mut place_shares = places.chunks(per_thread);
-        let mut result_shares = results.chunks_mut(per_thread);
-        let (own_places, own_results) = (
-            place_shares.next().unwrap_or_default(),
-            result_shares.next().unwrap_or_default(),
-        );
-        std::thread::scope(|s| {
-            let others: Vec<_> = place_shares
-                .zip(result_shares)
-                .zip(other_sets.iter_mut().zip(workers.iter_mut()))
-                .map(|((p, r), (set, w))| s.spawn(move || self.run(p, r, set, w.as_mut())))
-                .collect();
-            let mut errors = self.run(own_places, own_results, own_set, renderer);
-            for h in others {
-                errors += h.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
-            }
-            errors
+        let per_thread = places.len().div_ceil(parts);
+        // At most `parts` shares, so share `i > 0` has worker `i - 1` and probe set `i - 1` of `other_sets`.
+        let shares = places.len().div_ceil(per_thread);
+        let len = places.len().min(results.len());
+        let results_at = SharedMut::new(results.as_mut_ptr());
+        let own = SharedMut::new(own_set as *mut ProbeSet);
+        let sets_at = SharedMut::new(other_sets.as_mut_ptr());
+        let own_renderer = SharedMut::new(renderer as *mut (dyn Renderer + '_));
+        let workers_at = SharedMut::new(workers.as_mut_ptr());
+        threads.run(shares - 1, &|i| {
+            let start = i * per_thread;
+            let end = (start + per_thread).min(len);
+            // SAFETY: share `i` writes `results[start..end]` only, disjoint from the other shares' ranges, and uses
+            // its own probe set and renderer (this thread's for share 0, number `i - 1` of the others otherwise);
+            // `run` runs each share once while they are borrowed here.
+            let (results, set, renderer) = unsafe {
+                let results =
+                    std::slice::from_raw_parts_mut(results_at.get().add(start), end - start);
+                if i == 0 {
+                    (results, &mut *own.get(), &mut *own_renderer.get())
+                } else {
+                    let renderer: &mut dyn Renderer = (*workers_at.get().add(i - 1)).as_mut();
+                    (results, &mut *sets_at.get().add(i - 1), renderer)
+                }
+            };
+            self.run(&places[start..end], results, set, renderer)
         })
     }
 }

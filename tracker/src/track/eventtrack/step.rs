@@ -6,6 +6,8 @@ use crate::render::{Renderer, Scene};
 use crate::track::config::TrackerConfig;
 use crate::track::object::{ObjectTrack, TickInputs};
 
+use super::threads::{ObjectThreads, SharedMut};
+
 /// What stepping one object at a tick needs besides the object and a renderer (shared, read-only).
 pub(super) struct ObjectStep<'a> {
     pub(super) scene: &'a Scene<'a>,
@@ -51,30 +53,42 @@ impl ObjectStep<'_> {
     }
 
     /// [`Self::run`] over all `objects`: split into one share per renderer, `renderer` stepping the first share on
-    /// this thread and each of `workers` one of the others on a scoped thread. Each object's step reads only the
+    /// this thread and each of `workers` one of the others on one of `threads`. Each object's step reads only the
     /// shared inputs and writes only its own track, so the split changes nothing in the results.
     pub(super) fn run_split(
         &self,
         objects: &mut [ObjectTrack],
         renderer: &mut dyn Renderer,
         workers: &mut [Box<dyn Renderer + Send>],
+        threads: &mut ObjectThreads,
     ) -> u64 {
         let per_thread = own_share(objects.len(), workers.len());
         if per_thread == objects.len() {
             return self.run(objects, renderer);
         }
-        let mut shares = objects.chunks_mut(per_thread);
-        let own = shares.next().unwrap_or_default();
-        std::thread::scope(|s| {
-            let others: Vec<_> = shares
-                .zip(workers.iter_mut())
-                .map(|(share, r)| s.spawn(move || self.run(share, r.as_mut())))
-                .collect();
-            let mut errors = self.run(own, renderer);
-            for h in others {
-                errors += h.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
-            }
-            errors
+        let len = objects.len();
+        // At most `workers.len() + 1` shares (see `own_share`).
+        let shares = len.div_ceil(per_thread);
+        let objects_at = SharedMut::new(objects.as_mut_ptr());
+        let own_renderer = SharedMut::new(renderer as *mut (dyn Renderer + '_));
+        let workers_at = SharedMut::new(workers.as_mut_ptr());
+        threads.run(shares - 1, &|i| {
+            let start = i * per_thread;
+            let end = (start + per_thread).min(len);
+            // SAFETY: share `i` is `objects[start..end]`, disjoint from the other shares' ranges, and `run` runs
+            // each share once while `objects` is borrowed here; renderer `i` (this thread's for share 0, worker
+            // `i - 1` otherwise, `i <= workers.len()`) is used by that share alone.
+            let (share, renderer) = unsafe {
+                let share =
+                    std::slice::from_raw_parts_mut(objects_at.get().add(start), end - start);
+                let renderer: &mut dyn Renderer = if i == 0 {
+                    &mut *own_renderer.get()
+                } else {
+                    (*workers_at.get().add(i - 1)).as_mut()
+                };
+                (share, renderer)
+            };
+            self.run(share, renderer)
         })
     }
 }
