@@ -15,6 +15,13 @@ use nalgebra::Isometry3;
 /// the object could be rendered or matched there.
 pub(super) type PlaceResult = Option<(f64, Isometry3<f64>)>;
 
+// The place checks hand probe sets and results to other threads through raw pointers: keep them `Send`.
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<ProbeSet>();
+    send::<PlaceResult>();
+};
+
 /// One thread's scratch: a probe track per object and a copy of the scene to place it in.
 pub(super) struct ProbeSet {
     probes: Vec<ObjectTrack>,
@@ -123,14 +130,16 @@ impl PlaceCheck<'_> {
         let Some((own_set, other_sets)) = sets.split_first_mut() else {
             return 0;
         };
-        let parts = (1 + workers.len().min(other_sets.len())).min(places.len());
+        // Places with a result slot (the caller gives every place one).
+        let len = places.len().min(results.len());
+        let parts = (1 + workers.len().min(other_sets.len())).min(len);
         if parts <= 1 {
             return self.run(places, results, own_set, renderer);
         }
-        let per_thread = places.len().div_ceil(parts);
-        // At most `parts` shares, so share `i > 0` has worker `i - 1` and probe set `i - 1` of `other_sets`.
-        let shares = places.len().div_ceil(per_thread);
-        let len = places.len().min(results.len());
+        let per_thread = len.div_ceil(parts);
+        // At most `parts` shares, each starting below `len`, so share `i > 0` has worker `i - 1` and probe set
+        // `i - 1` of `other_sets`.
+        let shares = len.div_ceil(per_thread);
         let results_at = SharedMut::new(results.as_mut_ptr());
         let own = SharedMut::new(own_set as *mut ProbeSet);
         let sets_at = SharedMut::new(other_sets.as_mut_ptr());

@@ -93,6 +93,12 @@ impl ObjectStep<'_> {
     }
 }
 
+// The shares hand object tracks to other threads through raw pointers: keep them `Send`.
+const _: fn() = || {
+    fn send<T: Send>() {}
+    send::<ObjectTrack>();
+};
+
 /// How many objects, from the first, [`ObjectStep::run_split`] steps on the tracker's own thread when `workers`
 /// other renderers step the rest: all of them without workers, else an even share.
 pub(super) fn own_share(objects: usize, workers: usize) -> usize {

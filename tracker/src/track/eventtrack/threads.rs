@@ -8,6 +8,32 @@ use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::thread::JoinHandle;
 
+/// The shares a tick handed to object threads and has not received back yet. Its drop receives the rest, so that
+/// `ObjectThreads::run` cannot return, or unwind, while a thread still runs the tick's work.
+struct Outstanding<'a> {
+    threads: &'a [ObjectThread],
+    sent: usize,
+    received: usize,
+}
+
+impl Outstanding<'_> {
+    /// The next thread's result (`None` inside if that thread has ended), or `None` once all are received.
+    fn next(&mut self) -> Option<Option<ShareResult>> {
+        let t = self
+            .threads
+            .get(self.received)
+            .filter(|_| self.received < self.sent)?;
+        self.received += 1;
+        Some(t.done.recv().ok())
+    }
+}
+
+impl Drop for Outstanding<'_> {
+    fn drop(&mut self) {
+        while self.next().is_some() {}
+    }
+}
+
 /// A pointer to data a tick's shares use, each share a disjoint part of it (the caller's promise, checked where
 /// it is dereferenced).
 pub(super) struct SharedMut<T: ?Sized>(*mut T);
@@ -71,17 +97,22 @@ impl ObjectThreads {
     pub(super) fn run(&mut self, others: usize, work: &(dyn Fn(usize) -> u64 + Sync)) -> u64 {
         self.start(others);
         // SAFETY: only the lifetime is erased. Every share sent below is received back before this function
-        // returns (or the thread that held it has ended), so no thread uses `work` after it.
+        // returns, by the loop below or, if anything unwinds first, by `Outstanding`'s drop (or the thread that
+        // held it has ended), so no thread uses `work` after it.
         let erased: *const (dyn Fn(usize) -> u64 + Sync + 'static) = unsafe {
             std::mem::transmute::<
                 *const (dyn Fn(usize) -> u64 + Sync + '_),
                 *const (dyn Fn(usize) -> u64 + Sync + 'static),
             >(work)
         };
-        let mut sent = 0;
+        let mut outstanding = Outstanding {
+            threads: &self.threads,
+            received: 0,
+            sent: 0,
+        };
         let mut on_this_thread = 0..0;
         for index in 1..=others {
-            let handed = self.threads.get(index - 1).is_some_and(|t| {
+            let handed = outstanding.threads.get(index - 1).is_some_and(|t| {
                 t.shares
                     .send(Share {
                         work: erased,
@@ -90,27 +121,31 @@ impl ObjectThreads {
                     .is_ok()
             });
             if handed {
-                sent += 1;
+                outstanding.sent += 1;
             } else {
                 on_this_thread = index..others + 1;
                 break;
             }
         }
         let mut panic = None;
-        let mut total = 0;
+        let mut total = 0u64;
+        let keep_first =
+            |p: Box<dyn Any + Send>, panic: &mut Option<Box<dyn Any + Send>>| match panic {
+                None => *panic = Some(p),
+                // A later payload is dropped where a panic in its own drop cannot escape.
+                Some(_) => drop(catch_unwind(AssertUnwindSafe(move || drop(p)))),
+            };
         for index in std::iter::once(0).chain(on_this_thread) {
             match catch_unwind(AssertUnwindSafe(|| work(index))) {
-                Ok(n) => total += n,
-                Err(p) => panic = panic.or(Some(p)),
+                Ok(n) => total = total.wrapping_add(n),
+                Err(p) => keep_first(p, &mut panic),
             }
         }
-        for t in &self.threads[..sent] {
-            match t.done.recv() {
-                Ok(Ok(n)) => total += n,
-                Ok(Err(p)) => panic = panic.or(Some(p)),
-                Err(_) => {
-                    panic = panic.or(Some(Box::new("an object thread ended during a tick")));
-                }
+        while let Some(result) = outstanding.next() {
+            match result {
+                Some(Ok(n)) => total = total.wrapping_add(n),
+                Some(Err(p)) => keep_first(p, &mut panic),
+                None => keep_first(Box::new("an object thread ended during a tick"), &mut panic),
             }
         }
         if let Some(p) = panic {
@@ -151,8 +186,14 @@ impl ObjectThreads {
 impl Drop for ObjectThreads {
     fn drop(&mut self) {
         for t in self.threads.drain(..) {
-            drop(t.shares);
-            let _ = t.handle.join();
+            let ObjectThread {
+                shares,
+                done,
+                handle,
+            } = t;
+            drop(shares);
+            drop(done);
+            let _ = handle.join();
         }
     }
 }
@@ -204,5 +245,14 @@ mod tests {
         assert_eq!(*done.lock().unwrap(), 2);
         // The threads survive it.
         assert_eq!(threads.run(2, &|i| i as u64), 3);
+    }
+
+    #[test]
+    fn sums_wrap_instead_of_unwinding_while_threads_run_and_later_ticks_get_their_own_results() {
+        let mut threads = ObjectThreads::default();
+        assert_eq!(threads.run(2, &|_| u64::MAX), u64::MAX.wrapping_mul(3));
+        for k in 0..3u64 {
+            assert_eq!(threads.run(2, &|i| i as u64 + k), 3 + 3 * k);
+        }
     }
 }
