@@ -4,7 +4,7 @@
 
 use drivers::recording::{DepthFrame, Recording};
 use drivers::timeline::Tick;
-use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
+use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use nalgebra::Translation3;
@@ -41,6 +41,31 @@ pub fn mug_recording(dir: &Path, seconds: f64) -> Recording {
         generate(&cfg, dir, |_| {}).expect("generating the fixture recording");
     }
     Recording::open(dir).expect("opening the fixture recording")
+}
+
+/// Generates a 0.5 s scene into `dir` (reused if already there): the library mug shaken at moderate speed, and a can
+/// on its own moderate shake 15 cm nearer the camera (`hil-sim generate --with can:translation`), seed 5.
+pub fn mug_and_can_recording(dir: &Path) -> Recording {
+    if Recording::open(dir).is_err() {
+        let mut cfg = GenerateConfig::new(
+            ObjectSource::Library(ObjectKind::Mug),
+            MotionProfile::Shake,
+            SpeedLevel::Moderate,
+            0.5,
+            5,
+        );
+        cfg.companions.push(
+            Companion::parse(
+                "can:translation",
+                0,
+                MotionProfile::Shake,
+                SpeedLevel::Moderate,
+            )
+            .expect("companion spec"),
+        );
+        generate(&cfg, dir, |_| {}).expect("generating the two-object recording");
+    }
+    Recording::open(dir).expect("opening the two-object recording")
 }
 
 /// Replays `recording` into a tracker (`config`, `renderer`) from the first ground-truth pose to the end.

@@ -4,11 +4,7 @@
 //! two-object scene scored 47 / 8 ADD-S where the benchmark scored 22 / 23. Both hand the tracker each depth frame
 //! by moving it, not copying it.
 
-use drivers::recording::Recording;
-use eventtrack6d_tests::tick_fixture::{mug_recording, steady_tracker};
-use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
-use hil_sim::motion::{MotionProfile, SpeedLevel};
-use hil_sim::objects::ObjectKind;
+use eventtrack6d_tests::tick_fixture::{mug_and_can_recording, mug_recording, steady_tracker};
 use tracker::eval::{PoseRow, parse_pose_csv};
 use tracker::render::{CpuRenderer, RendererKind};
 use tracker::runtime::setup::recording_scene;
@@ -44,24 +40,7 @@ fn a_pushed_depth_frame_moves_in_and_the_previous_one_comes_back() {
 fn a_fast_replay_gives_the_offline_poses_exactly() {
     let dir = tempfile::tempdir().unwrap();
     let rec_dir = dir.path().join("rec");
-    let mut gen_cfg = GenerateConfig::new(
-        ObjectSource::Library(ObjectKind::Mug),
-        MotionProfile::Shake,
-        SpeedLevel::Moderate,
-        0.5,
-        5,
-    );
-    gen_cfg.companions.push(
-        Companion::parse(
-            "can:translation",
-            0,
-            MotionProfile::Shake,
-            SpeedLevel::Moderate,
-        )
-        .expect("companion spec"),
-    );
-    generate(&gen_cfg, &rec_dir, |_| {}).unwrap();
-    let rec = Recording::open(&rec_dir).unwrap();
+    let rec = mug_and_can_recording(&rec_dir);
 
     // Offline, as `bench` runs it.
     let scene = recording_scene(&rec, &[]).unwrap();

@@ -3,11 +3,9 @@
 //! quality changes; without it the tracker renders on its own thread only. With several object threads, each
 //! renders its own objects ahead.
 
-use drivers::recording::Recording;
-use eventtrack6d_tests::tick_fixture::{EstimateBits, mug_recording, replay_bits};
-use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
-use hil_sim::motion::{MotionProfile, SpeedLevel};
-use hil_sim::objects::ObjectKind;
+use eventtrack6d_tests::tick_fixture::{
+    EstimateBits, mug_and_can_recording, mug_recording, replay_bits,
+};
 use tracker::render::{CpuRenderer, RendererKind};
 use tracker::runtime::build_tracker;
 use tracker::runtime::setup::recording_scene;
@@ -58,26 +56,7 @@ fn depth30_renders_nothing_ahead() {
 /// threads (`object_threads = 2`), with or without renders ahead.
 fn replay_two_objects(prefetch: bool) -> (Vec<(i64, usize, [u64; 7])>, TrackerCounters) {
     let dir = std::env::temp_dir().join("eventtrack6d-tracker-ahead-two-objects");
-    if Recording::open(&dir).is_err() {
-        let mut gen_cfg = GenerateConfig::new(
-            ObjectSource::Library(ObjectKind::Mug),
-            MotionProfile::Shake,
-            SpeedLevel::Moderate,
-            0.5,
-            5,
-        );
-        gen_cfg.companions.push(
-            Companion::parse(
-                "can:translation",
-                0,
-                MotionProfile::Shake,
-                SpeedLevel::Moderate,
-            )
-            .expect("companion spec"),
-        );
-        generate(&gen_cfg, &dir, |_| {}).expect("generating the two-object recording");
-    }
-    let rec = Recording::open(&dir).expect("recording");
+    let rec = mug_and_can_recording(&dir);
     let scene = recording_scene(&rec, &[]).expect("scene");
     let config = TrackerConfig {
         prefetch_renders: prefetch,
