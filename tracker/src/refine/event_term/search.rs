@@ -45,7 +45,9 @@ impl EventEdges {
         if self.probes.is_empty() {
             return None;
         }
-        let range = (range_px * sx).round() as i64;
+        // A shift past the grid's size cannot bring an outline onto it: the bound keeps a tiny ROI (an object
+        // estimated far away, many grid bins per pixel) from asking for a search of millions of shifts.
+        let range = ((range_px * sx).round() as i64).min(wi.max(hi));
         // Every probe reads a zero-padded copy of the grid, so no shift needs a bounds check. The border covers
         // the probes' overshoot past the grid plus the range. A probe farther out than `range + 3` is moved in
         // to that distance: no shift in range brings it onto the grid either way.
