@@ -173,6 +173,30 @@ impl CarriedDepth {
         }
     }
 
+    /// For a `D_0` exposed before the tick it is used at: moves the points that lie in the object's box at
+    /// `pose_at_exposure` (grown by `margin`, metres) by `motion` (event camera frame, applied on the left: the
+    /// object's motion from the exposure to the tick). They stay among the static points, now where the object is
+    /// estimated to be at the tick, until [`Self::attach_to_object`] splits them at the pose refined there.
+    pub fn carry_object_part(
+        &mut self,
+        pose_at_exposure: &Isometry3<f64>,
+        motion: &Isometry3<f64>,
+        aabb_min: &Vector3<f64>,
+        aabb_max: &Vector3<f64>,
+        margin: f64,
+    ) {
+        let inv = pose_at_exposure.inverse().cast::<f32>();
+        let motion = motion.cast::<f32>();
+        let lo = (aabb_min - Vector3::repeat(margin)).cast::<f32>();
+        let hi = (aabb_max + Vector3::repeat(margin)).cast::<f32>();
+        for p in &mut self.static_points {
+            let x = inv * *p;
+            if (0..3).all(|k| x[k] >= lo[k] && x[k] <= hi[k]) {
+                *p = motion * *p;
+            }
+        }
+    }
+
     /// The points of `D_0` that stay where they were, event camera frame, metres.
     pub fn static_points(&self) -> &[Point3<f32>] {
         &self.static_points
@@ -321,5 +345,50 @@ mod tests {
             "the wall behind the old position was never seen"
         );
         assert!((img.at(10, 10) - 1.0).abs() < 1e-4, "background stays");
+    }
+
+    #[test]
+    fn a_late_frames_object_part_is_carried_to_the_tick_and_attached_there() {
+        let cam = PinholeCamera::new(100.0, 100.0, 49.5, 49.5, 100, 100).unwrap();
+        let rig = DepthRig {
+            camera: cam,
+            event_from_depth: Isometry3::identity(),
+        };
+        let mut frame = flat_frame(&cam, 1.0);
+        for v in 40..60 {
+            for u in 40..60 {
+                frame.depth_m[v * 100 + u] = 0.5;
+            }
+        }
+        let (lo, hi) = (
+            Vector3::new(-0.06, -0.06, -0.01),
+            Vector3::new(0.06, 0.06, 0.01),
+        );
+        let mut d = CarriedDepth::new();
+        d.register(&frame, &rig, &Point3::new(0.0, 0.0, 0.75), 0.6, 0);
+        let static_before = d.static_points().len();
+        // Exposed with the object at the centre; by the tick it moved 10 cm right (20 px).
+        let then = Isometry3::translation(0.0, 0.0, 0.5);
+        let now = Isometry3::translation(0.1, 0.0, 0.5);
+        d.carry_object_part(&then, &(now * then.inverse()), &lo, &hi, 0.005);
+        assert_eq!(
+            d.static_points().len(),
+            static_before,
+            "nothing attached yet"
+        );
+        let mut img = DepthImage::default();
+        d.render(&Isometry3::identity(), &cam, &mut img);
+        assert!(
+            (img.at(70, 50) - 0.5).abs() < 1e-4,
+            "object part at the tick"
+        );
+        assert_eq!(img.at(45, 50), 0.0, "and no longer where it was exposed");
+        assert!((img.at(10, 10) - 1.0).abs() < 1e-4, "background stays");
+        // Attached at the pose refined at the tick, the part then moves with the object.
+        d.attach_to_object(&now, &lo, &hi, 0.005);
+        assert_eq!(d.object_points().len(), 400 / (d.stride as usize).pow(2));
+        let later = Isometry3::translation(0.1, 0.1, 0.5);
+        d.render(&later, &cam, &mut img);
+        assert!((img.at(70, 70) - 0.5).abs() < 1e-4);
     }
 }

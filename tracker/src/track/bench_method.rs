@@ -3,7 +3,7 @@
 
 use super::config::{TrackerConfig, TrackingMethod};
 use super::eventtrack::{EventTrack6d, TrackedObject, TrackingRig};
-use super::offline::track_recording;
+use super::offline::{OfflineTiming, track_recording_timed};
 use crate::eval::PoseRecord;
 use crate::eval::bench::{Method, MethodInput};
 use crate::eval::{EvalError, symmetries_of};
@@ -123,6 +123,8 @@ pub struct TrackerMethod {
     method: TrackingMethod,
     config: TrackerConfig,
     init_noise: Option<InitNoise>,
+    /// Each depth frame reaches the tracker this long after its exposure, microseconds.
+    depth_latency_us: i64,
     renderer: Box<dyn Fn() -> Result<Box<dyn Renderer + Send>, String>>,
 }
 
@@ -134,6 +136,7 @@ impl TrackerMethod {
             method,
             config: method.configure(base),
             init_noise: None,
+            depth_latency_us: 0,
             renderer: Box::new(|| Ok(Box::new(CpuRenderer::new()))),
         }
     }
@@ -156,6 +159,13 @@ impl TrackerMethod {
             self.name = format!("{},s{}", self.name, noise.seed);
         }
         self.init_noise = Some(noise);
+        self
+    }
+
+    /// The same method with each depth frame handed over `latency_us` microseconds after its exposure (at the
+    /// first tick that late), as a live depth camera delivers it ([`OfflineTiming::depth_latency_us`]).
+    pub fn with_depth_latency(mut self, latency_us: i64) -> Self {
+        self.depth_latency_us = latency_us.max(0);
         self
     }
 
@@ -212,10 +222,14 @@ impl Method for TrackerMethod {
             .iter()
             .map(|i| Vec::with_capacity(i.ticks.len()))
             .collect();
-        track_recording(
+        let timing = OfflineTiming {
+            start_us: t0,
+            depth_latency_us: self.depth_latency_us,
+        };
+        track_recording_timed(
             rec,
             &mut tracker,
-            t0,
+            timing,
             |_, estimates, _| {
                 for e in estimates {
                     if let (Some(poses), Some(input)) =

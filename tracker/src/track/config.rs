@@ -193,7 +193,17 @@ pub struct TrackerConfig {
     /// [`crate::render::RenderAhead`]). The next tick takes that image only for an identical request, so poses do
     /// not depend on it. `false` keeps the CPU renderer on the tracker's thread alone.
     pub prefetch_renders: bool,
+    /// Oldest depth frame the tracker still uses, ms between its exposure and the tick after it arrived. A live
+    /// depth camera delivers a frame tens of milliseconds after its exposure: the tracker then registers it at
+    /// the object's estimate at the exposure, carries the object's part by the motion estimated since, and
+    /// refines against it at the current tick. Older frames are dropped and counted (`depth_frames_unused`);
+    /// 0 uses only frames that arrive by their own tick. At most [`MAX_DEPTH_AGE_LIMIT_MS`].
+    pub max_depth_age_ms: f64,
 }
+
+/// Largest [`TrackerConfig::max_depth_age_ms`]: the span the per-object pose history covers at 120 Hz, less a
+/// tick.
+pub const MAX_DEPTH_AGE_LIMIT_MS: f64 = 500.0;
 
 impl Default for TrackerConfig {
     fn default() -> Self {
@@ -241,6 +251,7 @@ impl Default for TrackerConfig {
             redetect: RedetectConfig::default(),
             object_threads: 0,
             prefetch_renders: true,
+            max_depth_age_ms: 200.0,
         }
     }
 }

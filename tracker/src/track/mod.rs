@@ -25,7 +25,7 @@ pub use fallback_check::{
     DepthFallbackCheck, FALLBACK_TRACE_HEADER, FallbackCandidate, FallbackRule, FallbackStart,
 };
 pub use hold::HoldPoseTracker;
-pub use offline::{OfflineStats, track_recording};
+pub use offline::{OfflineStats, OfflineTiming, track_recording, track_recording_timed};
 pub use overlay::{OverlayRenderer, OverlayWriter, overlay_strip};
 pub use redetect::RedetectConfig;
 pub use validate::InvalidParameter;
@@ -41,7 +41,9 @@ pub trait PoseTracker: Send {
     fn objects(&self) -> &[String];
     /// Events in time order (non-decreasing `t_us`), all at or before the next tick.
     fn push_events(&mut self, events: &[CdEvent]);
-    /// The depth frame exposed at time `t_us` (the depth-exposure tick), in the depth camera's pixels. A tracker
+    /// The depth frame exposed at time `t_us` (the depth-exposure tick), in the depth camera's pixels; it may
+    /// arrive after that tick (a live depth camera's latency: EventTrack6D then uses it at the next tick, up to
+    /// [`TrackerConfig::max_depth_age_ms`] after the exposure). A tracker
     /// that keeps the frame takes it without a copy and leaves its previous frame in `frame` (for the caller to
     /// reuse or drop); one that does not leaves `frame` as it is.
     fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame);

@@ -1,11 +1,12 @@
 //! Driving a [`PoseTracker`] over a recording as fast as possible (benchmark, `eventtrack6d track`): the same
-//! order of inputs the real-time runtime produces — events up to a tick, the depth frame exposed at the tick, the
-//! tick — without pacing.
+//! order of inputs the real-time runtime produces — events up to a tick, the depth frame exposed at the tick (or,
+//! with a depth latency, the frames that have arrived by then), the tick — without pacing.
 
 use super::{PoseEstimate, PoseTracker};
 use drivers::event::{CdEvent, EventSink, TriggerEdge};
 use drivers::recording::{Recording, RecordingError};
 use drivers::timeline::{Tick, TriggerTimeline};
+use std::collections::VecDeque;
 
 /// Counters of an offline run.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -18,6 +19,8 @@ pub struct OfflineStats {
     pub depth_frames: u64,
     /// Depth-exposure ticks whose frame file is missing (dropped by the sensor).
     pub depth_frames_missing: u64,
+    /// Depth frames still in transit after the last tick (exposed less than the depth latency before it).
+    pub depth_frames_in_transit: u64,
     /// Events after the last tick (never followed by a tick).
     pub events_after_last_tick: u64,
 }
@@ -39,22 +42,53 @@ impl EventSink for Collector<'_> {
     }
 }
 
+/// When an offline run hands its inputs to the tracker.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct OfflineTiming {
+    /// Ticks before this time (microseconds) only warm up the event state; from it on every tick is estimated.
+    pub start_us: i64,
+    /// Each depth frame is handed over before the first tick at least this long after its exposure,
+    /// microseconds (a live depth camera's transport latency); 0 = before its own tick.
+    pub depth_latency_us: i64,
+}
+
 /// Replays `recording` into `tracker`: ticks before `start_us` only warm up the event state; from `start_us` on,
 /// every tick is estimated and `on_tick(tick, estimates, tracker)` is called. `on_progress(bytes_read)` follows
-/// the event file.
+/// the event file. Each depth frame arrives with its own tick ([`track_recording_timed`] delays them).
 pub fn track_recording(
     recording: &Recording,
     tracker: &mut dyn PoseTracker,
     start_us: i64,
+    on_tick: impl FnMut(&Tick, &[PoseEstimate], &dyn PoseTracker),
+    on_progress: impl FnMut(u64),
+) -> Result<OfflineStats, RecordingError> {
+    let timing = OfflineTiming {
+        start_us,
+        depth_latency_us: 0,
+    };
+    track_recording_timed(recording, tracker, timing, on_tick, on_progress)
+}
+
+/// [`track_recording`] with the depth frames delivered `timing.depth_latency_us` after their exposure.
+pub fn track_recording_timed(
+    recording: &Recording,
+    tracker: &mut dyn PoseTracker,
+    timing: OfflineTiming,
     mut on_tick: impl FnMut(&Tick, &[PoseEstimate], &dyn PoseTracker),
     mut on_progress: impl FnMut(u64),
 ) -> Result<OfflineStats, RecordingError> {
+    let OfflineTiming {
+        start_us,
+        depth_latency_us,
+    } = timing;
     let mut reader = recording.events()?;
     let schedule = recording.meta.trigger;
     let mut timeline = TriggerTimeline::new(schedule.timeline_config());
     let mut pending: Vec<CdEvent> = Vec::with_capacity(1 << 16);
     let mut estimates = Vec::with_capacity(tracker.objects().len());
     let mut stats = OfflineStats::default();
+    // Frames exposed but not yet delivered: (exposure, frame number), oldest first.
+    let mut in_transit: VecDeque<(i64, u64)> = VecDeque::with_capacity(16);
     let mut feed = |tick: Tick,
                     pending: &mut Vec<CdEvent>,
                     tracker: &mut dyn PoseTracker,
@@ -69,12 +103,18 @@ pub fn track_recording(
         }
         if let Some(n) = tick.depth_frame {
             if recording.depth_frames.contains(&n) {
-                let mut frame = recording.depth_frame(n)?;
-                tracker.push_depth(tick.t_us, &mut frame);
-                stats.depth_frames += 1;
+                in_transit.push_back((tick.t_us, n));
             } else {
                 stats.depth_frames_missing += 1;
             }
+        }
+        while let Some(&(exposed_us, n)) = in_transit.front()
+            && tick.t_us >= exposed_us.saturating_add(depth_latency_us)
+        {
+            in_transit.pop_front();
+            let mut frame = recording.depth_frame(n)?;
+            tracker.push_depth(exposed_us, &mut frame);
+            stats.depth_frames += 1;
         }
         estimates.clear();
         tracker.tick(&tick, &mut estimates);
@@ -108,5 +148,6 @@ pub fn track_recording(
         }
     }
     stats.events_after_last_tick = pending.len() as u64;
+    stats.depth_frames_in_transit = in_transit.len() as u64;
     Ok(stats)
 }

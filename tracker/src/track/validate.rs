@@ -1,7 +1,7 @@
 //! Range checks of [`TrackerConfig`]: a parameter file is user input, and a value such as a zero prior or a NaN
 //! gain would otherwise turn into silent NaN poses. Every error names the TOML key.
 
-use super::config::TrackerConfig;
+use super::config::{MAX_DEPTH_AGE_LIMIT_MS, TrackerConfig};
 
 /// A tracker parameter outside its valid range.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -67,6 +67,12 @@ impl TrackerConfig {
             "must be at most 100",
         )?;
         check("damping", self.damping, non_neg, NON_NEGATIVE)?;
+        check(
+            "max_depth_age_ms",
+            self.max_depth_age_ms,
+            |v| (0.0..=MAX_DEPTH_AGE_LIMIT_MS).contains(&v),
+            "must be 0 to 500 ms",
+        )?;
         check(
             "prediction_gain",
             self.prediction_gain,
@@ -398,5 +404,11 @@ mod tests {
         assert_eq!(e.key, "quality.recover_ticks");
         let e = parse("[quality]\nlost_mean_ticks = 20000").unwrap_err();
         assert_eq!(e.key, "quality.lost_mean_ticks");
+        // The pose history covers 500 ms; a depth frame older than that could not be placed.
+        assert_eq!(parse("max_depth_age_ms = 0.0"), Ok(()));
+        assert_eq!(parse("max_depth_age_ms = 500.0"), Ok(()));
+        for bad in ["max_depth_age_ms = 501.0", "max_depth_age_ms = -1.0"] {
+            assert_eq!(parse(bad).unwrap_err().key, "max_depth_age_ms", "{bad}");
+        }
     }
 }

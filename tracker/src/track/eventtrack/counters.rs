@@ -7,8 +7,15 @@ pub struct TrackerCounters {
     pub ticks: u64,
     /// Depth frames used.
     pub depth_frames: u64,
-    /// Depth frames that arrived without a matching tick and were replaced before use.
+    /// Depth frames not used: replaced by a newer frame before a tick, or older than `max_depth_age_ms` at the
+    /// first tick after they arrived.
     pub depth_frames_unused: u64,
+    /// Of the depth frames used, those used after their own exposure's tick (they arrived late; see
+    /// `max_depth_age_ms`).
+    pub depth_frames_late: u64,
+    /// Late depth frames an object could not use, summed over objects: its pose history did not reach back to
+    /// the exposure (it was re-detected or reset since).
+    pub late_depth_unplaced: u64,
     /// Renders that failed (the object keeps its prediction for that tick).
     pub render_errors: u64,
     /// Depth frames at which the depth-only hypothesis replaced an object's event-driven estimate (all objects).

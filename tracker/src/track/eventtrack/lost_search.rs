@@ -235,6 +235,7 @@ impl EventTrack6d {
                 t_us: frame_t_us,
                 dt_s,
                 depth: Some(&self.depth),
+                depth_exposed_us: frame_t_us,
                 surface: &self.surface,
                 camera: &self.rig.event_camera,
                 depth_rig: &self.rig.depth,

@@ -216,6 +216,7 @@ impl EventTrack6d {
         TrackerCounters {
             depth_fallbacks: self.objects.iter().map(|o| o.fallbacks).sum(),
             redetections: self.objects.iter().map(|o| o.redetections).sum(),
+            late_depth_unplaced: self.objects.iter().map(|o| o.late_depth_unplaced).sum(),
             renders_prefetched: prefetch.clone().map(|p| p.started).sum(),
             prefetched_renders_used: prefetch.map(|p| p.used).sum(),
             ..self.counters
@@ -331,16 +332,23 @@ impl PoseTracker for EventTrack6d {
         self.next_tick.record(t_us);
         self.last_tick_us = Some(t_us);
         self.counters.ticks += 1;
-        // A depth frame belongs to this tick if it was exposed within half a tick period of it.
-        let depth_now = match self.depth_t_us {
-            Some(td) if (td - t_us).abs() <= 4_200 => true,
+        // A depth frame belongs to this tick if it was exposed within half a tick period of it; one exposed
+        // earlier arrived late (a live depth camera's transport) and is used now unless it is too old.
+        let max_age_us = (self.config.max_depth_age_ms * 1e3) as i64;
+        let exposed_us = match self.depth_t_us {
+            Some(td) if (td - t_us).abs() <= 4_200 => Some(t_us),
+            Some(td) if td < t_us - 4_200 && t_us - td <= max_age_us => {
+                self.counters.depth_frames_late += 1;
+                Some(td)
+            }
             Some(td) if td < t_us - 4_200 => {
                 self.depth_t_us = None;
                 self.counters.depth_frames_unused += 1;
-                false
+                None
             }
-            _ => false,
+            _ => None,
         };
+        let depth_now = exposed_us.is_some();
         for o in &mut self.objects {
             let step = (t_us - o.t_us) as f64 * 1e-6;
             o.predict(step.max(0.0), &self.config);
@@ -361,6 +369,7 @@ impl PoseTracker for EventTrack6d {
             t_us,
             dt_s,
             depth: depth_now.then_some(&self.depth),
+            depth_exposed_us: exposed_us.unwrap_or(t_us),
             surface: &self.surface,
             camera: &self.rig.event_camera,
             depth_rig: &self.rig.depth,
@@ -435,6 +444,8 @@ impl PoseTracker for EventTrack6d {
         let o = self.objects.get(object)?;
         self.last_tick_us?;
         let pose = match o.previous {
+            // Within the recent estimates: interpolated between the two ticks either side.
+            _ if let Some(p) = o.history().at(t_us) => p,
             Some((t0, p0)) if o.t_us > t0 => {
                 let s = (t_us - t0) as f64 / (o.t_us - t0) as f64;
                 // Interpolate, or extrapolate at most one tick period past the latest estimate.

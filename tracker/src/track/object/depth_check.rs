@@ -3,7 +3,7 @@
 
 use super::{ObjectTrack, TickInputs, add_prior};
 use crate::geometry::PinholeCamera;
-use crate::recon::DepthRig;
+use crate::recon::{DepthImage, DepthRig};
 use crate::refine::{DepthTermStats, NormalEquations, StepBounds, apply_step, solve_step};
 use crate::track::config::TrackerConfig;
 use drivers::recording::DepthFrame;
@@ -55,8 +55,13 @@ impl ObjectTrack {
         if self.neighbourhood.is_empty() {
             return None;
         }
+        // The frame shows the object at its exposure: a late frame's is the hypothesis carried back there.
+        let at_exposure = match self.late_motion {
+            Some((_, motion)) => motion.inverse() * pose,
+            None => *pose,
+        };
         self.neighbourhood.motion_agreement(
-            pose,
+            &at_exposure,
             frame,
             inputs.depth_rig,
             config.depth_term.occlusion_gap as f32,
@@ -69,6 +74,17 @@ impl ObjectTrack {
         &self,
         start: Isometry3<f64>,
         roi_camera: &PinholeCamera,
+        config: &TrackerConfig,
+    ) -> (Isometry3<f64>, DepthTermStats) {
+        self.refine_on_depth_in(start, roi_camera, &self.depth_now, config)
+    }
+
+    /// [`Self::refine_on_depth`] against `depth`, an image in `camera`.
+    pub(super) fn refine_on_depth_in(
+        &self,
+        start: Isometry3<f64>,
+        camera: &PinholeCamera,
+        depth: &DepthImage,
         config: &TrackerConfig,
     ) -> (Isometry3<f64>, DepthTermStats) {
         let bounds = StepBounds {
@@ -85,8 +101,8 @@ impl ObjectTrack {
                 &self.view,
                 &pose,
                 &self.center_obj,
-                roi_camera,
-                &self.depth_now,
+                camera,
+                depth,
                 &mut ne,
             );
             add_prior(&mut ne, &offset, prior_t, prior_r);
@@ -96,7 +112,7 @@ impl ObjectTrack {
             offset += step;
             pose = apply_step(&pose, &self.center_obj, &step);
         }
-        let stats = self.depth_stats_at(&pose, roi_camera, config);
+        let stats = config.depth_term.stats(&self.view, &pose, camera, depth);
         (pose, stats)
     }
 

@@ -1,6 +1,8 @@
 //! One tracked object's state and its per-tick refinement.
 
 mod depth_check;
+mod history;
+mod late_depth;
 mod motion;
 mod quality_window;
 mod refine;
@@ -16,6 +18,7 @@ use crate::refine::{
 };
 use crate::render::RenderTarget;
 use drivers::recording::DepthFrame;
+pub use history::PoseHistory;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3, Vector6};
 use quality_window::QualityWindow;
 
@@ -37,7 +40,7 @@ pub(crate) struct ObjectTrack {
     /// Smoothed velocity of the centre (m/s) and angular velocity (rad/s), camera frame.
     pub velocity: Vector6<f64>,
     pub predicted: Isometry3<f64>,
-    /// The estimate at the latest fresh depth frame (time, pose).
+    /// The estimate at the latest fresh depth frame's exposure (time, pose).
     anchor: Option<(i64, Isometry3<f64>)>,
     /// The estimate at the depth frame before `anchor` (time, pose): with it, the motion between the last two depth
     /// frames, which the events since cannot have changed.
@@ -61,6 +64,20 @@ pub(crate) struct ObjectTrack {
     /// Fraction of the model points the depth measured (not hidden, not missing) at the latest depth frame.
     visibility: f64,
     depth_frames_used: u32,
+    /// Time of the first pose, microseconds (the hold before the first depth frame is counted from it).
+    first_us: i64,
+    /// Recent estimates: where the object was when a depth frame that arrives late was exposed.
+    history: PoseHistory,
+    /// At a tick that uses a depth frame exposed at an earlier tick, from [`Self::prepare_depth`] to the
+    /// refinement: its exposure time and the estimate then.
+    late_frame: Option<(i64, Isometry3<f64>)>,
+    /// At a tick that used a depth frame exposed at an earlier tick: the exposure time and the camera-frame
+    /// motion `T_predicted * T_exposure^-1` the frame's object points were carried by; `None` otherwise.
+    late_motion: Option<(i64, Isometry3<f64>)>,
+    /// A late frame's depth around the object where it was at the exposure, in that ROI's camera.
+    late_depth: DepthImage,
+    /// Late depth frames this object could not use: its history did not reach back to their exposure.
+    pub late_depth_unplaced: u64,
     pub roi: Option<Roi>,
     pub target: RenderTarget,
     view: ModelView,
@@ -77,6 +94,8 @@ pub(crate) struct TickInputs<'a> {
     pub t_us: i64,
     pub dt_s: f64,
     pub depth: Option<&'a DepthFrame>,
+    /// Exposure of `depth`, microseconds: `t_us`, or earlier for a frame that arrived after its own tick.
+    pub depth_exposed_us: i64,
     pub surface: &'a EventSurface,
     pub camera: &'a PinholeCamera,
     pub depth_rig: &'a DepthRig,
@@ -127,6 +146,16 @@ impl ObjectTrack {
             depth_fit: 1.0,
             visibility: 1.0,
             depth_frames_used: 0,
+            first_us: t_us,
+            history: PoseHistory::new(),
+            late_frame: None,
+            late_motion: None,
+            late_depth: DepthImage {
+                width: config.roi_size,
+                height: config.roi_size,
+                z: Vec::with_capacity(n * n),
+            },
+            late_depth_unplaced: 0,
             roi: None,
             target: RenderTarget::with_capacity(config.roi_size, config.roi_size),
             view: ModelView::with_capacity(config.max_surface_points, config.max_contour_points),
@@ -176,6 +205,11 @@ impl ObjectTrack {
         self.depth_fit = track.depth_fit;
         self.visibility = track.visibility;
         self.depth_frames_used = track.depth_frames_used;
+    }
+
+    /// The recent estimates, oldest first.
+    pub fn history(&self) -> &PoseHistory {
+        &self.history
     }
 
     /// The object's centre in the camera frame at `pose`.
@@ -268,6 +302,7 @@ impl ObjectTrack {
         self.anchor_before = None;
         self.low_ticks = 0;
         self.recent_quality.clear();
+        self.history.clear();
         self.redetections += 1;
     }
 
@@ -292,6 +327,8 @@ impl ObjectTrack {
         self.pose = normalise(pose);
         self.predicted = self.pose;
         self.t_us = t_us;
+        self.history.clear();
+        self.history.push(t_us, self.pose);
         self.low_ticks = 0;
         self.recent_quality.clear();
         self.state = TrackingState::Tracking;
@@ -303,6 +340,7 @@ impl ObjectTrack {
     pub fn hold(&mut self, t_us: i64) {
         self.previous = Some((self.t_us, self.pose));
         self.t_us = t_us;
+        self.history.push(t_us, self.pose);
     }
 
     /// Whether re-detection should search for this object at a depth frame: it is `lost`, or `degraded` for
@@ -373,7 +411,12 @@ impl ObjectTrack {
         };
         if fresh_depth.is_some() {
             self.anchor_before = self.anchor;
-            self.anchor = Some((inputs.t_us, pose));
+            // A late frame anchors the estimate carried back to its exposure, by the motion its points were
+            // carried by, so that anchors stay at exposures (the next frame's motion check compares frames).
+            self.anchor = Some(match self.late_motion {
+                Some((exposed_us, motion)) => (exposed_us, normalise(motion.inverse() * pose)),
+                None => (inputs.t_us, pose),
+            });
         }
         if span > 0.0 && self.state != TrackingState::Lost {
             let measured = self.observable_motion(&reference, &pose, span);
@@ -384,9 +427,17 @@ impl ObjectTrack {
         } else if self.state == TrackingState::Lost {
             self.velocity = Vector6::zeros();
         }
+        if fresh_depth.is_some()
+            && let Some((exposed_us, _)) = self.late_motion
+        {
+            // What the late frame changed at this tick, it changes since its exposure.
+            self.history
+                .correct_since(exposed_us, &normalise(self.predicted.inverse() * pose));
+        }
         self.previous = Some((self.t_us, self.pose));
         self.pose = normalise(pose);
         self.t_us = inputs.t_us;
+        self.history.push(self.t_us, self.pose);
     }
 }
 

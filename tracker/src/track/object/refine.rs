@@ -14,7 +14,7 @@ use nalgebra::{Isometry3, Translation3, Vector3, Vector6};
 /// The depth a tick's refinement uses, prepared by [`ObjectTrack::prepare_depth`] before the ROI render is taken.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct TickDepth {
-    /// A depth frame exposed at this tick was registered as the new `D_0`.
+    /// A depth frame was registered as the new `D_0` at this tick (exposed now, or late and carried here).
     fresh: bool,
     /// Weight of the depth term (1 for a fresh frame, `carried_depth_weight` between frames, 0 without depth).
     weight: f64,
@@ -27,24 +27,47 @@ impl ObjectTrack {
     /// by [`Self::update_roi`]. None of it reads the ROI render, so the tracker runs it before taking the render:
     /// a render that is still in flight (prefetched on a GPU) overlaps this work.
     pub fn prepare_depth(&mut self, inputs: &TickInputs<'_>, config: &TrackerConfig) -> TickDepth {
+        self.late_motion = None;
+        self.late_frame = None;
         let Some(roi) = self.roi else {
             return TickDepth::default();
         };
         let roi_camera = inputs.camera.crop(&roi);
         let predicted = self.predicted;
-        let fresh = inputs.depth.is_some()
+        let mut fresh = inputs.depth.is_some()
             && match config.depth {
                 DepthUse::EveryTick | DepthUse::DepthFramesOnly => true,
                 DepthUse::FirstFrameOnly => self.depth_frames_used == 0,
                 DepthUse::Off => false,
             };
+        // A frame exposed at an earlier tick is placed by the estimate then; without one it is of no use.
+        let mut late_from = None;
+        if fresh && inputs.depth_exposed_us < inputs.t_us {
+            late_from = self.history.at(inputs.depth_exposed_us);
+            if late_from.is_none() {
+                self.late_depth_unplaced += 1;
+                fresh = false;
+            }
+        }
         let mut depth = TickDepth::default();
         if fresh {
             if let Some(frame) = inputs.depth {
                 self.capture_neighbourhood(frame, inputs.depth_rig, config);
-                self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
-                self.carried
-                    .render(&predicted, &roi_camera, &mut self.depth_now);
+                match late_from {
+                    // Aligned and carried by the refinement, which needs the model view of the ROI render.
+                    Some(then) => self.register_late_depth(
+                        frame,
+                        inputs.depth_rig,
+                        inputs.depth_exposed_us,
+                        &then,
+                        config,
+                    ),
+                    None => {
+                        self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
+                        self.carried
+                            .render(&predicted, &roi_camera, &mut self.depth_now);
+                    }
+                }
                 depth = TickDepth {
                     fresh: true,
                     weight: 1.0,
@@ -70,13 +93,14 @@ impl ObjectTrack {
         self.fallback_check = None;
         let Some(roi) = self.roi else {
             if depth.fresh {
-                // The render failed after the frame was registered: its points move with the pose reported.
-                self.carried.attach_to_object(
-                    &self.predicted,
-                    &self.aabb_min,
-                    &self.aabb_max,
-                    0.01,
-                );
+                // The render failed after the frame was registered: its points move with the pose reported (a
+                // late frame's are split where the object was estimated at the exposure).
+                let split_at = match self.late_frame.take() {
+                    Some((_, then)) => then,
+                    None => self.predicted,
+                };
+                self.carried
+                    .attach_to_object(&split_at, &self.aabb_min, &self.aabb_max, 0.01);
             }
             self.finish(inputs, self.predicted, None, None, config);
             return;
@@ -96,6 +120,12 @@ impl ObjectTrack {
             weight: depth_weight,
             at_predicted: depth_now_at_predicted,
         } = depth;
+        // A late frame: the refinement starts from the prediction corrected at the frame's exposure.
+        let predicted = if fresh && self.late_frame.is_some() {
+            self.carry_late_depth(inputs, &roi_camera, config)
+        } else {
+            predicted
+        };
         // Outline the depth shows behind a nearer surface (a hand gripping the object) fires no events: leave it
         // out of the event and intensity terms rather than pull it onto the occluder's edges.
         if config.hide_occluded_outline && depth_weight > 0.0 {
@@ -107,9 +137,15 @@ impl ObjectTrack {
                 config.hide_occluded_max_share,
             );
         }
+        // Until its first depth frame, for as long as a late one could still come, an object holds its first
+        // pose: events alone, with no depth to anchor them, drift (a live depth camera's first frame arrives tens
+        // of milliseconds after the first tick).
+        let awaiting_depth = self.depth_frames_used == 0
+            && (inputs.t_us - self.first_us) as f64 <= config.max_depth_age_ms * 1e3;
         let refine_now = match config.depth {
             DepthUse::DepthFramesOnly => fresh,
-            _ => true,
+            DepthUse::Off => true,
+            DepthUse::EveryTick | DepthUse::FirstFrameOnly => fresh || !awaiting_depth,
         };
         if !refine_now {
             self.finish(inputs, self.pose, None, None, config);
