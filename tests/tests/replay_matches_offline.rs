@@ -9,7 +9,9 @@ use tracker::eval::{PoseRow, parse_pose_csv};
 use tracker::render::{CpuRenderer, RendererKind};
 use tracker::runtime::setup::recording_scene;
 use tracker::runtime::{self, Config, Hooks, build_tracker};
-use tracker::track::{PoseTracker, TrackerConfig, track_recording};
+use tracker::track::{
+    OfflineTiming, PoseTracker, TrackerConfig, TrackerCounters, track_recording_timed,
+};
 
 /// A pushed depth frame moves into the tracker, which hands back the frame it held: the samples are never
 /// copied (an 848x480 frame is 1.6 MB, on the depth tick's latency).
@@ -38,6 +40,21 @@ fn a_pushed_depth_frame_moves_in_and_the_previous_one_comes_back() {
 
 #[test]
 fn a_fast_replay_gives_the_offline_poses_exactly() {
+    replay_matches_offline(0);
+}
+
+/// With depth frames delivered 40 ms after their exposure (`[source] depth_latency_ms`, `track
+/// --depth-latency-ms`), both hand each frame over before the same tick.
+#[test]
+fn a_fast_replay_with_late_depth_gives_the_offline_poses_exactly() {
+    let counters = replay_matches_offline(40);
+    assert!(counters.depth_frames_late >= 10, "{counters:?}");
+    assert_eq!(counters.depth_frames_late, counters.depth_frames);
+}
+
+/// Replays the two-object scene offline and through the runtime with depth frames `latency_ms` late, checks both
+/// gave the same estimates and counters, and returns the counters.
+fn replay_matches_offline(latency_ms: i64) -> TrackerCounters {
     let dir = tempfile::tempdir().unwrap();
     let rec_dir = dir.path().join("rec");
     let rec = mug_and_can_recording(&rec_dir);
@@ -53,10 +70,14 @@ fn a_fast_replay_gives_the_offline_poses_exactly() {
     .unwrap();
     let names = tracker.objects().to_vec();
     let mut offline = Vec::new();
-    let stats = track_recording(
+    let timing = OfflineTiming {
+        start_us: scene.objects[0].first_pose.0,
+        depth_latency_us: latency_ms * 1000,
+    };
+    let stats = track_recording_timed(
         &rec,
         tracker.as_mut(),
-        scene.objects[0].first_pose.0,
+        timing,
         |_, estimates, _| {
             offline.extend(estimates.iter().map(|e| {
                 PoseRow {
@@ -72,7 +93,7 @@ fn a_fast_replay_gives_the_offline_poses_exactly() {
         |_| {},
     )
     .unwrap();
-    assert!(stats.ticks >= 50 && stats.depth_frames >= 12, "{stats:?}");
+    assert!(stats.ticks >= 50 && stats.depth_frames >= 11, "{stats:?}");
     let offline_counters = tracker.tracker_counters().expect("the tracker counts");
 
     // Through the runtime, with small event batches so that batch edges fall everywhere.
@@ -82,6 +103,7 @@ fn a_fast_replay_gives_the_offline_poses_exactly() {
 [source]
 kind = "replay"
 pace = "fast"
+depth_latency_ms = {}
 [replay]
 recording = "{}"
 [tracker]
@@ -96,6 +118,7 @@ zenoh = false
 [can]
 enabled = false
 "#,
+        latency_ms,
         rec_dir.display(),
         out_dir.display()
     );
@@ -127,4 +150,13 @@ enabled = false
         "tracker:         {} re-detections",
         offline_counters.redetections
     )));
+    assert_eq!(
+        summary.source_stats.depth_frames, stats.depth_frames,
+        "both delivered the same frames"
+    );
+    assert_eq!(
+        summary.source_stats.depth_in_transit,
+        stats.depth_frames_in_transit
+    );
+    offline_counters
 }

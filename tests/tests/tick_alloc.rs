@@ -8,7 +8,7 @@ use eventtrack6d_tests::tick_fixture::{mug_recording, steady_tracker_of};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use tracker::render::CpuRenderer;
-use tracker::track::{PoseTracker, TrackerConfig, TrackingMethod};
+use tracker::track::{PoseTracker, TrackerConfig, TrackerCounters, TrackingMethod};
 
 struct Counting;
 
@@ -37,8 +37,14 @@ unsafe impl GlobalAlloc for Counting {
 static GLOBAL: Counting = Counting;
 
 /// Counts the heap allocations (every thread) of 11 steady-state ticks of a tracker of `objects` objects (the mug
-/// and copies of it beside it), each followed by `prepare_next_tick`, after warming every buffer up.
-fn allocations_of_steady_ticks(rec: &Recording, config: TrackerConfig, objects: usize) -> usize {
+/// and copies of it beside it), each followed by `prepare_next_tick`, after warming every buffer up. Depth frames
+/// arrive `depth_late_us` after their exposure (0: with their tick).
+fn allocations_of_steady_ticks(
+    rec: &Recording,
+    config: TrackerConfig,
+    objects: usize,
+    depth_late_us: i64,
+) -> (usize, TrackerCounters) {
     let mut s = steady_tracker_of(rec.clone(), config, Box::new(CpuRenderer::new()), objects);
     let mut out = Vec::with_capacity(4 * objects);
     let events: Vec<_> = (0..2000u16)
@@ -56,7 +62,8 @@ fn allocations_of_steady_ticks(rec: &Recording, config: TrackerConfig, objects: 
     depth_tick.depth_frame = Some(s.depth.index);
     for _ in 0..10 {
         s.tracker.push_events(&events);
-        s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
+        s.tracker
+            .push_depth(depth_tick.t_us - depth_late_us, &mut s.depth);
         out.clear();
         s.tracker.tick(&depth_tick, &mut out);
         s.tracker.prepare_next_tick();
@@ -69,7 +76,8 @@ fn allocations_of_steady_ticks(rec: &Recording, config: TrackerConfig, objects: 
     for k in 0..10 {
         s.tracker.push_events(&events);
         if k % 4 == 0 {
-            s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
+            s.tracker
+                .push_depth(depth_tick.t_us - depth_late_us, &mut s.depth);
             out.clear();
             s.tracker.tick(&depth_tick, &mut out);
         } else {
@@ -83,7 +91,7 @@ fn allocations_of_steady_ticks(rec: &Recording, config: TrackerConfig, objects: 
     s.tracker.tick(&s.last_tick, &mut out);
     COUNTING.store(false, Ordering::SeqCst);
     assert_eq!(out.len(), objects);
-    ALLOCATIONS.load(Ordering::SeqCst)
+    (ALLOCATIONS.load(Ordering::SeqCst), s.tracker.counters())
 }
 
 #[test]
@@ -92,7 +100,7 @@ fn steady_state_ticks_do_not_allocate() {
     let rec = mug_recording(dir.path(), 0.25);
     for method in TrackingMethod::ALL {
         let config = method.configure(&TrackerConfig::default());
-        let n = allocations_of_steady_ticks(&rec, config, 1);
+        let (n, _) = allocations_of_steady_ticks(&rec, config, 1, 0);
         assert_eq!(
             n, 0,
             "{method}: {n} heap allocations in 11 steady-state ticks"
@@ -103,9 +111,16 @@ fn steady_state_ticks_do_not_allocate() {
         object_threads: 2,
         ..TrackerConfig::default()
     };
-    let n = allocations_of_steady_ticks(&rec, config, 2);
+    let (n, _) = allocations_of_steady_ticks(&rec, config, 2, 0);
     assert_eq!(
         n, 0,
         "two objects on two threads: {n} heap allocations in 11 steady-state ticks"
+    );
+    // Depth frames 20 ms late: registered at the pose history's estimate, aligned there and carried.
+    let (n, counters) = allocations_of_steady_ticks(&rec, TrackerConfig::default(), 1, 20_000);
+    assert!(counters.depth_frames_late >= 13, "{counters:?}");
+    assert_eq!(
+        n, 0,
+        "late depth frames: {n} heap allocations in 11 steady-state ticks"
     );
 }

@@ -111,9 +111,19 @@ pub fn method_from_spec_with(
     spec: &str,
     base: &crate::track::TrackerConfig,
 ) -> Result<Box<dyn Method>, String> {
+    method_from_spec_timed(spec, base, 0)
+}
+
+/// [`method_from_spec_with`] with the tracker methods' depth frames handed over `depth_latency_us` microseconds
+/// after their exposure ([`crate::track::TrackerMethod::with_depth_latency`]); the harness methods ignore it.
+pub fn method_from_spec_timed(
+    spec: &str,
+    base: &crate::track::TrackerConfig,
+    depth_latency_us: i64,
+) -> Result<Box<dyn Method>, String> {
     let spec = spec.trim();
     if let Some(method) = tracker_method_from_spec(spec, base) {
-        return Ok(Box::new(method?));
+        return Ok(Box::new(method?.with_depth_latency(depth_latency_us)));
     }
     if spec == "static" {
         return Ok(Box::new(StaticMethod));

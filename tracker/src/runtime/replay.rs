@@ -1,12 +1,14 @@
 //! Recording replay: `events.raw` decoded chunk by chunk (`Recording::events`, the format's streaming decoder)
 //! into event batches and trigger edges, paced by the recording's clock (real time) or as fast as the tracker
 //! takes them, with each depth frame delivered when the trigger edge that completes its phase-coded pulse arrives
+//! (or, with a depth latency, before the first tick pulse that late: a live depth camera's transport)
 //! (frames are read ahead on a helper thread so PNG decoding never delays the stream).
 
 use super::config::Pace;
 use super::source::{Source, SourceError, SourceOutput, SourceStats, StopFlag};
 use drivers::event::{CdEvent, EventBuffer, TriggerEdge};
 use drivers::recording::{DepthFrame, Recording};
+use std::collections::VecDeque;
 use std::sync::mpsc::{Receiver, sync_channel};
 use std::time::{Duration, Instant};
 
@@ -17,6 +19,7 @@ pub struct ReplaySource {
     batch_events: usize,
     batch_us: i64,
     start_delay: Duration,
+    depth_latency_us: i64,
 }
 
 impl ReplaySource {
@@ -35,7 +38,16 @@ impl ReplaySource {
             batch_events: batch_events.max(1),
             batch_us: batch_us.max(1),
             start_delay,
+            depth_latency_us: 0,
         }
+    }
+
+    /// The same replay with each depth frame delivered `latency_us` microseconds (stream time) after its
+    /// exposure: before the first rising edge on the tick channel at least that late, as a live depth camera's
+    /// transport delivers it.
+    pub fn with_depth_latency(mut self, latency_us: i64) -> Self {
+        self.depth_latency_us = latency_us.max(0);
+        self
     }
 
     /// The recording.
@@ -107,6 +119,9 @@ struct Replayer<'a> {
     depth: Receiver<DepthItem>,
     next_depth: Option<DepthItem>,
     depth_done: bool,
+    depth_latency_us: i64,
+    /// Frames exposed but not yet delivered (exposure time, frame), oldest first.
+    in_transit: VecDeque<(i64, Box<DepthFrame>)>,
     stats: SourceStats,
 }
 
@@ -156,6 +171,13 @@ impl Replayer<'_> {
         self.stats.trigger_edges += 1;
         if edge.channel == self.channel {
             if edge.rising {
+                while let Some((exposed_us, _)) = self.in_transit.front()
+                    && edge.t_us >= exposed_us.saturating_add(self.depth_latency_us)
+                    && let Some((exposed_us, frame)) = self.in_transit.pop_front()
+                {
+                    self.stats.depth_frames += 1;
+                    self.out.depth(exposed_us, frame);
+                }
                 self.pending_rise = Some(edge.t_us);
             } else if let Some(rise) = self.pending_rise.take()
                 && edge.t_us - rise >= self.wide_threshold_us
@@ -165,6 +187,9 @@ impl Replayer<'_> {
                 let n = self.wide_pulses;
                 self.wide_pulses += 1;
                 match self.depth_frame(n) {
+                    Some(frame) if self.depth_latency_us > 0 => {
+                        self.in_transit.push_back((rise, Box::new(frame)));
+                    }
                     Some(frame) => {
                         self.stats.depth_frames += 1;
                         self.out.depth(rise, Box::new(frame));
@@ -211,6 +236,8 @@ impl Source for ReplaySource {
             depth: spawn_depth_reader(&self.recording, stop.clone()),
             next_depth: None,
             depth_done: false,
+            depth_latency_us: self.depth_latency_us,
+            in_transit: VecDeque::with_capacity(16),
             stats: SourceStats::default(),
         };
         let deadline = Instant::now() + self.start_delay;
@@ -251,6 +278,7 @@ impl Source for ReplaySource {
             }
         }
         r.flush();
+        r.stats.depth_in_transit = r.in_transit.len() as u64;
         r.stats.set_anomalies(reader.anomalies());
         Ok(r.stats)
     }

@@ -1,8 +1,9 @@
 //! The sensor-source interface: recording replay implements it today, the live EVK4 + D435i drivers later.
 //!
 //! A source pushes, in stream order, decoded CD event batches, trigger edges (stamped with the instant they were
-//! decoded) and depth frames (each before the trigger edge that completes its phase-coded pulse) into a
-//! [`SourceOutput`]. It runs on a blocking thread of the runtime and returns when its stream ends or when
+//! decoded) and depth frames (stamped with their exposure; the replay delivers each before the trigger edge that
+//! completes its phase-coded pulse, or later with `depth_latency_ms`; a live depth camera delivers it when it
+//! arrives, and the tracker uses a late frame at its next tick) into a [`SourceOutput`]. It runs on a blocking thread of the runtime and returns when its stream ends or when
 //! [`StopFlag::is_set`] says so.
 
 use super::queue::{Ingest, IngestQueue};
@@ -54,6 +55,8 @@ pub struct SourceStats {
     pub depth_frames: u64,
     /// Phase-coded pulses whose depth frame was missing (dropped by the camera, or unreadable).
     pub depth_missing: u64,
+    /// Depth frames still in transit when the stream ended (replay with `depth_latency_ms`).
+    pub depth_in_transit: u64,
     /// Skipped stream words by kind (malformed sensor data, counted and skipped).
     pub anomalies: Vec<(String, u64)>,
     /// Whether the source stopped early on request.

@@ -123,6 +123,15 @@ impl std::fmt::Display for Summary {
                 c.prefetched_renders_used
             )?;
         }
+        if let Some(c) = &self.tracker
+            && (c.depth_frames_late > 0 || self.source_stats.depth_in_transit > 0)
+        {
+            writeln!(
+                f,
+                "late depth:      {} frames used after their own tick ({} times an object's pose history did not reach back), {} still in transit at the end",
+                c.depth_frames_late, c.late_depth_unplaced, self.source_stats.depth_in_transit
+            )?;
+        }
         if !self.source_stats.anomalies.is_empty() {
             let a: Vec<String> = self
                 .source_stats

@@ -7,8 +7,8 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tracker::eval::bench::{
-    MethodResults, SuiteSequence, expand_seeds, method_from_spec_with, open_sequence, results_json,
-    results_markdown, run_sequence,
+    MethodResults, SuiteSequence, expand_seeds, method_from_spec_timed, open_sequence,
+    results_json, results_markdown, run_sequence,
 };
 use tracker::eval::format_pose_csv;
 use tracker::eval::plot::line_plot;
@@ -46,6 +46,20 @@ pub struct BenchArgs {
     /// for `track --params` (each method's preset applies on top).
     #[arg(long, value_name = "TOML")]
     pub params: Option<PathBuf>,
+    /// Hand each depth frame to the tracker methods this long after its exposure, at the first tick that late, as
+    /// a live depth camera's transport delivers it (0 = with its own tick). The tracker uses a frame up to its
+    /// `max_depth_age_ms` old.
+    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = parse_latency_ms)]
+    pub depth_latency_ms: f64,
+}
+
+/// A depth latency in milliseconds: a finite number from 0 to 1000.
+pub fn parse_latency_ms(text: &str) -> Result<f64, String> {
+    text.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite() && (0.0..=1000.0).contains(v))
+        .ok_or_else(|| format!("`{text}` is not a latency from 0 to 1000 ms"))
 }
 
 /// Generates (or lets hil-sim reuse) the named suite and returns its directory.
@@ -153,7 +167,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     for spec in &specs {
-        methods.push(method_from_spec_with(spec, &base).map_err(anyhow::Error::msg)?);
+        let latency_us = (args.depth_latency_ms * 1e3).round() as i64;
+        methods.push(method_from_spec_timed(spec, &base, latency_us).map_err(anyhow::Error::msg)?);
     }
     let given = Path::new(&args.suite);
     let (suite_name, dir) = if given.is_dir() {
@@ -200,6 +215,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                  results.json).\n"
             .into(),
     });
+    if args.depth_latency_ms > 0.0 {
+        md.push_str(&format!(
+            "\nDepth frames reached the tracker methods {} ms after their exposure (`--depth-latency-ms`).\n",
+            args.depth_latency_ms
+        ));
+    }
     let json = results_json(&suite_name, &results, args.auc.limit());
     let md_path = args.out.join("results.md");
     std::fs::write(&md_path, &md).with_context(|| format!("cannot write {}", md_path.display()))?;

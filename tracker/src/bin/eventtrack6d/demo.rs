@@ -47,6 +47,10 @@ pub struct DemoArgs {
     /// microseconds) to FILE.
     #[arg(long, value_name = "FILE")]
     pub latency_log: Option<PathBuf>,
+    /// Deliver each depth frame this long after its exposure, as a live depth camera's transport does
+    /// (`[source] depth_latency_ms`; default 0: with its own tick).
+    #[arg(long, value_name = "MS", value_parser = crate::bench::parse_latency_ms)]
+    pub depth_latency_ms: Option<f64>,
 }
 
 /// Writes an image strip of six overlays (reconstructed intensity `I_t` with the model outline at the published
@@ -92,6 +96,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     }
     if args.no_zenoh {
         config.sinks.zenoh = false;
+    }
+    if let Some(ms) = args.depth_latency_ms {
+        config.source.depth_latency_ms = ms;
     }
     if let Some(p) = &args.latency_log {
         config.output.latency_log = Some(session::from_working_dir(p)?);

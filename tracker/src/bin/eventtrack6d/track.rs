@@ -9,8 +9,9 @@ use std::time::Instant;
 use tracker::eval::{PoseRecord, PoseTrack, format_pose_csv, ground_truth_objects, parse_pose_csv};
 use tracker::render::{Renderer, RendererKind, create_renderer};
 use tracker::track::{
-    DepthFallbackCheck, EventTrack6d, FALLBACK_TRACE_HEADER, InitNoise, OverlayRenderer,
-    OverlayWriter, TrackerConfig, TrackingMethod, recording_object, recording_rig, track_recording,
+    DepthFallbackCheck, EventTrack6d, FALLBACK_TRACE_HEADER, InitNoise, OfflineTiming,
+    OverlayRenderer, OverlayWriter, TrackerConfig, TrackingMethod, recording_object, recording_rig,
+    track_recording_timed,
 };
 
 /// Track the objects of a recording from their first pose on: every 120 Hz tick gets a pose per object, written
@@ -55,6 +56,11 @@ pub struct TrackArgs {
     /// confirms for it and for the event-driven estimate, and whether it replaced the estimate).
     #[arg(long, value_name = "CSV")]
     pub fallback_trace: Option<PathBuf>,
+    /// Hand each depth frame to the tracker this long after its exposure, at the first tick that late, as a live
+    /// depth camera's transport delivers it (0 = with its own tick). The tracker uses a frame up to its
+    /// `max_depth_age_ms` old.
+    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = crate::bench::parse_latency_ms)]
+    pub depth_latency_ms: f64,
 }
 
 /// Tracker parameters from a `--params` TOML file (the `[tracker]` table's keys at top level), validated; the
@@ -164,10 +170,14 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     let mut checks: Vec<DepthFallbackCheck> = Vec::with_capacity(names.len());
     let mut overlay_error = None;
     let started = Instant::now();
-    let stats = track_recording(
+    let timing = OfflineTiming {
+        start_us: start,
+        depth_latency_us: (args.depth_latency_ms * 1e3).round() as i64,
+    };
+    let stats = track_recording_timed(
         &rec,
         &mut tracker,
-        start,
+        timing,
         |tick, estimates, t| {
             for e in estimates {
                 out.push(PoseRecord {
@@ -241,9 +251,21 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             counters.renders_prefetched, counters.prefetched_renders_used
         );
     }
+    if counters.depth_frames_late > 0 {
+        eprintln!(
+            "{} depth frames used after their own tick (delivered --depth-latency-ms late); {} times an object's pose history did not reach back to the exposure",
+            counters.depth_frames_late, counters.late_depth_unplaced
+        );
+    }
+    if stats.depth_frames_in_transit > 0 {
+        eprintln!(
+            "{} depth frames were still in transit after the last tick",
+            stats.depth_frames_in_transit
+        );
+    }
     if counters.render_errors > 0 || counters.depth_frames_unused > 0 {
         eprintln!(
-            "warning: {} render errors, {} depth frames unused",
+            "warning: {} render errors, {} depth frames unused (replaced before a tick, or older than max_depth_age_ms)",
             counters.render_errors, counters.depth_frames_unused
         );
     }

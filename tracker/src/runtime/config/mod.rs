@@ -159,6 +159,11 @@ pub struct SourceConfig {
     /// Wait this long after the sinks are up before the first event is read (lets subscribers connect), ms.
     #[serde(default)]
     pub start_delay_ms: u64,
+    /// Replay only: deliver each depth frame this long after its exposure (stream time), as a live depth
+    /// camera's transport does, ms; 0 = with the trigger pulse of its exposure. The tracker uses a late frame
+    /// at the first tick after it arrives (`max_depth_age_ms`).
+    #[serde(default)]
+    pub depth_latency_ms: f64,
 }
 
 /// `[demo]`: the generated demo sequence.

@@ -95,6 +95,30 @@ fn out_of_range_values_are_named() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("`demo.object`") && e.contains("teapot"), "{e}");
+    for bad in ["-5.0", "1500.0", "nan"] {
+        let e = parse(&format!(
+            "[source]\nkind = \"demo\"\ndepth_latency_ms = {bad}\n"
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("`source.depth_latency_ms`"), "{bad}: {e}");
+    }
+    let ok = parse("[source]\nkind = \"demo\"\ndepth_latency_ms = 40.0\n").unwrap();
+    assert_eq!(ok.source.depth_latency_ms, 40.0);
+}
+
+#[test]
+fn a_simulated_depth_latency_is_refused_for_a_live_source() {
+    let e = parse(
+        "[source]\nkind = \"live\"\ndepth_latency_ms = 30.0\n[live]\nevent_camera = \"evk4\"\ndepth_camera = \"d435i\"\n\
+         depth_device = \"/dev/video2\"\ncalibration = \"camera.json\"\n",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("`source.depth_latency_ms`") && e.contains("live source has its own"),
+        "{e}"
+    );
 }
 
 #[test]
