@@ -48,7 +48,7 @@ impl Default for NormalEquations {
 
 impl NormalEquations {
     /// Adds residual `r` with weight `w`, gradient `grad = dr/dP` at object point `p` about centre `c`.
-    #[inline]
+    #[inline(always)]
     pub fn add_point(&mut self, grad: &Vector3<f64>, p_minus_c: &Vector3<f64>, r: f64, w: f64) {
         let rot = p_minus_c.cross(grad);
         let j = [grad.x, grad.y, grad.z, rot.x, rot.y, rot.z];
