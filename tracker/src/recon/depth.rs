@@ -310,20 +310,26 @@ mod tests {
         assert_eq!(img.at(2, 2), 0.0);
     }
 
-    #[test]
-    fn object_points_move_with_the_object_and_background_stays() {
+    /// A 100 x 100 px depth camera at the event camera, and its frame of a 20 x 20 px square (the object) at
+    /// 0.5 m on a wall at 1 m.
+    fn square_on_wall() -> (PinholeCamera, DepthRig, DepthFrame) {
         let cam = PinholeCamera::new(100.0, 100.0, 49.5, 49.5, 100, 100).unwrap();
         let rig = DepthRig {
             camera: cam,
             event_from_depth: Isometry3::identity(),
         };
-        // A near square (object) at 0.5 m on a wall at 1 m.
         let mut frame = flat_frame(&cam, 1.0);
         for v in 40..60 {
             for u in 40..60 {
                 frame.depth_m[v * 100 + u] = 0.5;
             }
         }
+        (cam, rig, frame)
+    }
+
+    #[test]
+    fn object_points_move_with_the_object_and_background_stays() {
+        let (cam, rig, frame) = square_on_wall();
         let mut d = CarriedDepth::new();
         d.register(&frame, &rig, &Point3::new(0.0, 0.0, 0.75), 0.6, 0);
         let pose0 = Isometry3::translation(0.0, 0.0, 0.5);
@@ -349,17 +355,7 @@ mod tests {
 
     #[test]
     fn a_late_frames_object_part_is_carried_to_the_tick_and_attached_there() {
-        let cam = PinholeCamera::new(100.0, 100.0, 49.5, 49.5, 100, 100).unwrap();
-        let rig = DepthRig {
-            camera: cam,
-            event_from_depth: Isometry3::identity(),
-        };
-        let mut frame = flat_frame(&cam, 1.0);
-        for v in 40..60 {
-            for u in 40..60 {
-                frame.depth_m[v * 100 + u] = 0.5;
-            }
-        }
+        let (cam, rig, frame) = square_on_wall();
         let (lo, hi) = (
             Vector3::new(-0.06, -0.06, -0.01),
             Vector3::new(0.06, 0.06, 0.01),
