@@ -72,8 +72,11 @@ pub struct FallbackCandidate {
 pub struct DepthFallbackCheck {
     /// Index of the object (as in [`super::PoseEstimate::object`]).
     pub object: usize,
-    /// Tick time, microseconds on the event camera's clock.
+    /// Time the poses are at, microseconds on the event camera's clock: the depth frame's exposure (a tick).
     pub t_us: i64,
+    /// Tick the check was made at, microseconds: `t_us` for a frame on time, later for a frame that arrived after
+    /// its own tick (checked at its exposure, where it shows the object).
+    pub tick_us: i64,
     /// The event-driven estimate before the check, `T_cam_obj`, metres.
     pub estimate: Isometry3<f64>,
     /// The same agreeing fraction for `estimate` as [`FallbackCandidate::agreeing`].
@@ -89,7 +92,7 @@ pub struct DepthFallbackCheck {
 }
 
 /// Header of the fallback trace CSV.
-pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced,estimate_motion_agreeing,candidate_motion_agreeing,estimate_qx,estimate_qy,estimate_qz,estimate_qw,candidate_qx,candidate_qy,candidate_qz,candidate_qw,estimate_event_support,candidate_event_support";
+pub const FALLBACK_TRACE_HEADER: &str = "t_us,object,estimate_x,estimate_y,estimate_z,estimate_agreeing,start,candidate_x,candidate_y,candidate_z,candidate_agreeing,rotation_to_estimate_deg,replaced,estimate_motion_agreeing,candidate_motion_agreeing,estimate_qx,estimate_qy,estimate_qz,estimate_qw,candidate_qx,candidate_qy,candidate_qz,candidate_qw,estimate_event_support,candidate_event_support,tick_us";
 
 impl DepthFallbackCheck {
     /// Index into `candidates` of the one that replaces the estimate, by the safety net's `rule`; `None` keeps it.
@@ -164,7 +167,8 @@ impl DepthFallbackCheck {
     /// Appends one CSV row per candidate (columns of [`FALLBACK_TRACE_HEADER`]) to `out`; `name` is the object's
     /// name. Positions are the translations of the poses, metres; `rotation_to_estimate_deg` is the angle between
     /// the candidate's and the estimate's orientation; the last eight columns are the two orientations as unit
-    /// quaternions (x, y, z, w), so each row holds both whole poses, followed by the two event supports.
+    /// quaternions (x, y, z, w), so each row holds both whole poses, followed by the two event supports and the
+    /// tick the check was made at.
     pub fn write_csv_rows(&self, name: &str, out: &mut String) {
         let e = self.estimate.translation.vector;
         let eq = self.estimate.rotation.coords;
@@ -180,7 +184,7 @@ impl DepthFallbackCheck {
             // Writing into a String cannot fail.
             let _ = writeln!(
                 out,
-                "{},{},{:.6},{:.6},{:.6},{:.4},{},{:.6},{:.6},{:.6},{:.4},{:.3},{},{},{},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{},{}",
+                "{},{},{:.6},{:.6},{:.6},{:.4},{},{:.6},{:.6},{:.6},{:.4},{:.3},{},{},{},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{},{},{}",
                 self.t_us,
                 name,
                 e.x,
@@ -206,6 +210,7 @@ impl DepthFallbackCheck {
                 cq.w,
                 optional_fraction(self.estimate_event_support),
                 optional_fraction(c.event_support),
+                self.tick_us,
             );
         }
     }
@@ -234,6 +239,7 @@ mod tests {
         let check = DepthFallbackCheck {
             object: 0,
             t_us: 33_833,
+            tick_us: 58_833,
             estimate,
             estimate_agreeing: 0.35,
             estimate_motion_agreeing: Some(0.9),
@@ -271,7 +277,7 @@ mod tests {
             q.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6),
             "{q:?}"
         );
-        assert_eq!(&cols[23..], &["0.7500", "0.4000"]);
+        assert_eq!(&cols[23..], &["0.7500", "0.4000", "58833"]);
 
         let kept = DepthFallbackCheck {
             replaced_by: None,
@@ -297,7 +303,7 @@ mod tests {
         assert_eq!(&cols[1][13..15], &["0.9000", ""]);
         assert!(out.lines().nth(1).unwrap().contains(",extrapolated,"));
         // An unknown event support is an empty field too.
-        assert_eq!(&cols[1][23..], &["0.7500", ""]);
+        assert_eq!(&cols[1][23..25], &["0.7500", ""]);
     }
 
     /// A rule with the estimate's own motion never taken as contradicted.
@@ -320,6 +326,7 @@ mod tests {
         DepthFallbackCheck {
             object: 0,
             t_us: 0,
+            tick_us: 0,
             estimate: Isometry3::identity(),
             estimate_agreeing,
             estimate_motion_agreeing,

@@ -436,7 +436,7 @@ impl PoseTracker for EventTrack6d {
             self.objects
                 .iter()
                 .filter_map(|o| o.fallback_check)
-                .filter(|c| Some(c.t_us) == latest),
+                .filter(|c| Some(c.tick_us) == latest),
         );
     }
 

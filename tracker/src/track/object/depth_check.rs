@@ -51,17 +51,27 @@ impl ObjectTrack {
         inputs: &TickInputs<'_>,
         config: &TrackerConfig,
     ) -> Option<f64> {
-        let frame = inputs.depth?;
-        if self.neighbourhood.is_empty() {
-            return None;
-        }
         // The frame shows the object at its exposure: a late frame's is the hypothesis carried back there.
         let at_exposure = match self.late_motion {
             Some((_, motion)) => motion.inverse() * pose,
             None => *pose,
         };
+        self.motion_agreement_at_exposure(&at_exposure, inputs, config)
+    }
+
+    /// [`Self::motion_agreement_at`] for `pose`, the object's pose at the depth frame's exposure.
+    pub(super) fn motion_agreement_at_exposure(
+        &self,
+        pose: &Isometry3<f64>,
+        inputs: &TickInputs<'_>,
+        config: &TrackerConfig,
+    ) -> Option<f64> {
+        let frame = inputs.depth?;
+        if self.neighbourhood.is_empty() {
+            return None;
+        }
         self.neighbourhood.motion_agreement(
-            &at_exposure,
+            pose,
             frame,
             inputs.depth_rig,
             config.depth_term.occlusion_gap as f32,

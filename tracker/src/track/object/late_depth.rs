@@ -1,22 +1,36 @@
 //! A depth frame that arrived after its own tick: registered where the object was estimated at its exposure,
-//! aligned there on depth alone, and its object part carried by the motion estimated since to the tick it is used
-//! at. A late frame tells where the object was, not how it moved since: the events carry that.
+//! checked there by the depth safety net, and its object part carried by the motion estimated since to the tick it
+//! is used at. A late frame tells where the object was, not how it moved since: the events carry that.
 
+use super::depth_check::seen_agreement;
 use super::{ObjectTrack, TickInputs};
 use crate::geometry::PinholeCamera;
-use crate::recon::DepthRig;
+use crate::recon::{DepthImage, DepthRig};
+use crate::refine::{DepthTermStats, apply_step};
 use crate::track::config::TrackerConfig;
+use crate::track::fallback_check::{
+    DepthFallbackCheck, FALLBACK_STARTS, FallbackCandidate, FallbackStart,
+};
 use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Point3};
 
 /// Margin around the object's box, metres, within which a late frame's points count as the object's when they are
-/// carried to the tick (split at the pose aligned at the exposure).
+/// carried to the tick (split at the pose chosen at the exposure).
 const LATE_SPLIT_MARGIN_M: f64 = 0.01;
+
+/// What the depth said about a pose at a late frame's exposure ([`ObjectTrack::settle_at_exposure`]).
+#[derive(Debug, Clone, Copy)]
+struct Settled {
+    /// The pose refined on the frame's depth alone, or the start if that agreed less.
+    pose: Isometry3<f64>,
+    /// The depth term's counts at `pose`.
+    stats: DepthTermStats,
+}
 
 impl ObjectTrack {
     /// Registers `frame`, exposed at `exposed_us` when the object was estimated at `then`, as the new `D_0`: a
     /// sphere around the object then and at this tick's prediction, every point static for now. The refinement
-    /// aligns and carries it ([`Self::carry_late_depth`]).
+    /// checks and carries it ([`Self::carry_late_depth`]).
     pub(super) fn register_late_depth(
         &mut self,
         frame: &DepthFrame,
@@ -33,24 +47,27 @@ impl ObjectTrack {
         self.late_frame = Some((exposed_us, *then));
     }
 
-    /// For a frame registered by [`Self::register_late_depth`]: refines the estimate at the exposure on the frame's
-    /// depth alone (the model view of this tick's render, placed there), carries the points in the object's box
-    /// at that pose by the motion estimated from the exposure to the prediction, and renders the result into
-    /// `depth_now` in this tick's ROI. Returns the prediction corrected by what the alignment changed at the
-    /// exposure, the pose the refinement starts from.
+    /// For a frame registered by [`Self::register_late_depth`]: chooses the pose at the exposure
+    /// ([`Self::check_at_exposure`]), carries the points in the object's box there by the motion the events
+    /// estimated from the exposure to the prediction, and renders the result into `depth_now` in this tick's ROI.
+    /// Returns the pose the refinement starts from (the prediction moved by what the check changed at the
+    /// exposure) and the depth term's counts at the exposure (`None` when the object was out of view then), the
+    /// evidence of the frame for quality: at the tick the carried points agree with the start by construction.
     pub(super) fn carry_late_depth(
         &mut self,
         inputs: &TickInputs<'_>,
         roi_camera: &PinholeCamera,
+        use_events: bool,
         config: &TrackerConfig,
-    ) -> Isometry3<f64> {
+    ) -> (Isometry3<f64>, Option<DepthTermStats>) {
         let Some((exposed_us, then)) = self.late_frame.take() else {
-            return self.predicted;
+            return (self.predicted, None);
         };
-        let aligned = self.align_at_exposure(&then, inputs, config);
+        let checked = self.check_at_exposure(&then, exposed_us, inputs, use_events, config);
+        let at_exposure = checked.map_or(then, |s| s.pose);
         let motion = self.predicted * then.inverse();
         self.carried.carry_object_part(
-            &aligned,
+            &at_exposure,
             &motion,
             &self.aabb_min,
             &self.aabb_max,
@@ -59,37 +76,128 @@ impl ObjectTrack {
         self.late_motion = Some((exposed_us, motion));
         self.carried
             .render(&self.predicted, roi_camera, &mut self.depth_now);
-        // `motion * aligned` = the prediction moved by the alignment's change at the exposure, in the object frame.
-        let start = motion * aligned;
-        if start.translation.vector.iter().all(|v| v.is_finite()) && start.translation.z > 1e-3 {
+        // `motion * at_exposure` = the prediction moved by the check's change at the exposure, in the object frame.
+        let start = motion * at_exposure;
+        let start = if start.translation.vector.iter().all(|v| v.is_finite())
+            && start.translation.z > 1e-3
+        {
             start
         } else {
             self.predicted
+        };
+        (start, checked.map(|s| s.stats))
+    }
+
+    /// The depth safety net at a late frame's exposure, where the frame shows the object: the estimate then
+    /// (`then`, from the pose history) and, with events in use, the safety net's depth-only candidates from the
+    /// depth frame before, each refined on the frame's depth alone; the rule of [`DepthFallbackCheck::replacement`]
+    /// chooses (with no event verdict: the events at the exposure are gone). Recorded in `self.fallback_check` at
+    /// the exposure. `None` when the object was out of view at `then`.
+    ///
+    /// At the tick the frame is used at, the check could not tell: the points carried there agree with the motion
+    /// the events estimated, right or wrong.
+    fn check_at_exposure(
+        &mut self,
+        then: &Isometry3<f64>,
+        exposed_us: i64,
+        inputs: &TickInputs<'_>,
+        use_events: bool,
+        config: &TrackerConfig,
+    ) -> Option<Settled> {
+        let mut image = std::mem::take(&mut self.late_depth);
+        let estimate = self.settle_at_exposure(then, inputs, config, &mut image);
+        let Some(estimate) = estimate else {
+            self.late_depth = image;
+            return None;
+        };
+        let anchor = self.anchor.filter(|&(t, _)| t < exposed_us);
+        let Some((t_anchor, anchor)) =
+            anchor.filter(|_| use_events && config.depth_fallback_margin >= 0.0)
+        else {
+            self.late_depth = image;
+            return Some(estimate);
+        };
+        let span = (exposed_us - t_anchor) as f64 * 1e-6;
+        let starts = [
+            Some((FallbackStart::PreviousDepthPose, anchor)),
+            config.depth_fallback_extrapolate.then(|| {
+                let start = apply_step(&anchor, &self.center_obj, &(self.velocity * span));
+                (FallbackStart::Extrapolated, start)
+            }),
+            config
+                .depth_fallback_anchored
+                .then(|| self.anchored_extrapolation(exposed_us, config))
+                .flatten()
+                .map(|start| (FallbackStart::AnchoredMotion, start)),
+        ];
+        let mut check = DepthFallbackCheck {
+            object: usize::from(self.label) - 1,
+            t_us: exposed_us,
+            tick_us: inputs.t_us,
+            estimate: estimate.pose,
+            estimate_agreeing: seen_agreement(&estimate.stats),
+            estimate_motion_agreeing: self.motion_agreement_at_exposure(
+                &estimate.pose,
+                inputs,
+                config,
+            ),
+            estimate_event_support: None,
+            candidates: [None; FALLBACK_STARTS],
+            replaced_by: None,
+        };
+        let mut settled = [None; FALLBACK_STARTS];
+        for (k, start) in starts.into_iter().enumerate() {
+            let Some((kind, from)) = start else { continue };
+            let Some(s) = self.settle_at_exposure(&from, inputs, config, &mut image) else {
+                continue;
+            };
+            check.candidates[k] = Some(FallbackCandidate {
+                start: kind,
+                pose: s.pose,
+                agreeing: seen_agreement(&s.stats),
+                motion_agreeing: self.motion_agreement_at_exposure(&s.pose, inputs, config),
+                event_support: None,
+            });
+            settled[k] = Some(s);
+        }
+        self.late_depth = image;
+        check.replaced_by = check.replacement(&config.fallback_rule());
+        self.fallback_check = Some(check);
+        match check.replaced_by.and_then(|k| settled[k]) {
+            Some(s) => {
+                self.fallbacks += 1;
+                Some(s)
+            }
+            None => Some(estimate),
         }
     }
 
-    /// The estimate at the exposure `then`, refined on depth alone against the registered late frame in the ROI
-    /// around it; `then` itself when the object was out of view then or the depth agrees no better after.
-    fn align_at_exposure(
-        &mut self,
-        then: &Isometry3<f64>,
+    /// `start`, a pose at the late frame's exposure, refined on the registered frame's depth alone in the ROI
+    /// around it (the model view of this tick's render, placed there); `start` itself if the depth agrees no
+    /// better after. `None` when `start` has no ROI (out of view). `image` is scratch for the frame's depth in
+    /// that ROI.
+    fn settle_at_exposure(
+        &self,
+        start: &Isometry3<f64>,
         inputs: &TickInputs<'_>,
         config: &TrackerConfig,
-    ) -> Isometry3<f64> {
-        let Some(roi) = self.roi_at(then, inputs.camera, config, inputs.t_us, false) else {
-            return *then;
-        };
+        image: &mut DepthImage,
+    ) -> Option<Settled> {
+        let roi = self.roi_at(start, inputs.camera, config, inputs.t_us, false)?;
         let camera = inputs.camera.crop(&roi);
-        let mut image = std::mem::take(&mut self.late_depth);
-        self.carried.render(then, &camera, &mut image);
-        let (aligned, stats) = self.refine_on_depth_in(*then, &camera, &image, config);
-        let before = config.depth_term.stats(&self.view, then, &camera, &image);
-        self.late_depth = image;
-        if super::depth_check::seen_agreement(&stats) >= super::depth_check::seen_agreement(&before)
-        {
-            aligned
+        self.carried.render(start, &camera, image);
+        let (refined, stats) = self.refine_on_depth_in(*start, &camera, image, config);
+        let before = config.depth_term.stats(&self.view, start, &camera, image);
+        Some(if seen_agreement(&stats) >= seen_agreement(&before) {
+            Settled {
+                pose: refined,
+                stats,
+            }
         } else {
-            *then
-        }
+            Settled {
+                pose: *start,
+                stats: before,
+            }
+        })
     }
 }

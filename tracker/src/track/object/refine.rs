@@ -120,11 +120,13 @@ impl ObjectTrack {
             weight: depth_weight,
             at_predicted: depth_now_at_predicted,
         } = depth;
-        // A late frame: the refinement starts from the prediction corrected at the frame's exposure.
-        let predicted = if fresh && self.late_frame.is_some() {
-            self.carry_late_depth(inputs, &roi_camera, config)
+        // A late frame: checked at its exposure, and the refinement starts from the prediction corrected there.
+        let late = fresh && self.late_frame.is_some();
+        let (predicted, late_fit) = if late {
+            let use_events = config.events && !self.view.contour.is_empty();
+            self.carry_late_depth(inputs, &roi_camera, use_events, config)
         } else {
-            predicted
+            (predicted, None)
         };
         // Outline the depth shows behind a nearer surface (a hand gripping the object) fires no events: leave it
         // out of the event and intensity terms rather than pull it onto the occluder's edges.
@@ -340,8 +342,9 @@ impl ObjectTrack {
         // Safety net at a fresh depth frame: the depth-only refinement from the previous depth frame's pose
         // (what `depth30` would report). If events led the estimate astray, the depth image says so: keep
         // whichever hypothesis more of the model points in view agree with, unless the surroundings contradict its
-        // motion ([`DepthFallbackCheck::replacement`]).
+        // motion ([`DepthFallbackCheck::replacement`]). A late frame had its check at its exposure.
         if fresh
+            && !late
             && use_events
             && config.depth_fallback_margin >= 0.0
             && let Some((t_anchor, anchor)) = self.anchor
@@ -365,6 +368,7 @@ impl ObjectTrack {
             let mut check = DepthFallbackCheck {
                 object: usize::from(self.label) - 1,
                 t_us: inputs.t_us,
+                tick_us: inputs.t_us,
                 estimate: pose,
                 estimate_agreeing: seen_agreement(&main_stats),
                 estimate_motion_agreeing: self.motion_agreement_at(&pose, inputs, config),
@@ -420,7 +424,11 @@ impl ObjectTrack {
         } else {
             None
         };
-        let fit = depth_stats.filter(|_| depth_weight >= 1.0);
+        let fit = if late {
+            late_fit
+        } else {
+            depth_stats.filter(|_| depth_weight >= 1.0)
+        };
         self.finish(inputs, pose, fit, support, config);
     }
 }
