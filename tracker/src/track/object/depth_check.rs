@@ -195,6 +195,18 @@ pub(super) fn seen_agreement(stats: &DepthTermStats) -> f64 {
     (stats.inliers as f64 / seen).min(1.0)
 }
 
+/// Of two depth terms' counts, those that agree less ([`seen_agreement`]; the first on a tie); either when the
+/// other is unknown.
+pub(super) fn weaker_fit(
+    a: Option<DepthTermStats>,
+    b: Option<DepthTermStats>,
+) -> Option<DepthTermStats> {
+    match (a, b) {
+        (Some(a), Some(b)) if seen_agreement(&b) < seen_agreement(&a) => Some(b),
+        (a, b) => a.or(b),
+    }
+}
+
 /// Intersection over union of a rendered silhouette with the measured depth near the object, in [0, 1]: pixels
 /// where the model (`mask == label`) and the measurement (`measured`, metres, 0 = invalid) agree within
 /// `tolerance` metres, over pixels where either the model is or a measurement lies within `band` metres of the
@@ -244,6 +256,19 @@ mod tests {
         // Almost all hidden: scored as if 30 % were seen, so 10 agreeing points stay a poor place.
         assert!((seen_agreement(&stats(200, 190, 10)) - 10.0 / 60.0).abs() < 1e-12);
         assert_eq!(seen_agreement(&stats(0, 0, 0)), 0.0);
+    }
+
+    #[test]
+    fn the_weaker_fit_is_the_less_agreeing_one_or_the_known_one() {
+        let (good, poor) = (stats(200, 0, 180), stats(200, 100, 40));
+        assert_eq!(weaker_fit(Some(good), Some(poor)), Some(poor));
+        assert_eq!(weaker_fit(Some(poor), Some(good)), Some(poor));
+        assert_eq!(weaker_fit(None, Some(good)), Some(good));
+        assert_eq!(weaker_fit(Some(poor), None), Some(poor));
+        assert_eq!(weaker_fit(None, None), None);
+        // On a tie, the first: 150 of 200 seen against 75 of 100 seen (100 hidden).
+        let (a, b) = (stats(200, 0, 150), stats(200, 100, 75));
+        assert_eq!(weaker_fit(Some(a), Some(b)), Some(a));
     }
 
     #[test]

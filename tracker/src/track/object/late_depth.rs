@@ -4,7 +4,7 @@
 
 use super::depth_check::seen_agreement;
 use super::{ObjectTrack, TickInputs};
-use crate::geometry::PinholeCamera;
+use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::{DepthImage, DepthRig};
 use crate::refine::{DepthTermStats, apply_step};
 use crate::track::config::TrackerConfig;
@@ -51,8 +51,8 @@ impl ObjectTrack {
     /// ([`Self::check_at_exposure`]), carries the points in the object's box there by the motion the events
     /// estimated from the exposure to the prediction, and renders the result into `depth_now` in this tick's ROI.
     /// Returns the pose the refinement starts from (the prediction moved by what the check changed at the
-    /// exposure) and the depth term's counts at the exposure (`None` when the object was out of view then), the
-    /// evidence of the frame for quality: at the tick the carried points agree with the start by construction.
+    /// exposure) and the depth term's counts at the exposure (`None` when the object was out of view then), part
+    /// of the frame's evidence for quality: at the tick its object part agrees with the start by construction.
     pub(super) fn carry_late_depth(
         &mut self,
         inputs: &TickInputs<'_>,
@@ -104,32 +104,38 @@ impl ObjectTrack {
         use_events: bool,
         config: &TrackerConfig,
     ) -> Option<Settled> {
+        let anchor = self
+            .anchor
+            .filter(|&(t, _)| t < exposed_us && use_events && config.depth_fallback_margin >= 0.0);
+        let starts = anchor.map(|(t_anchor, anchor)| {
+            let span = (exposed_us - t_anchor) as f64 * 1e-6;
+            [
+                Some((FallbackStart::PreviousDepthPose, anchor)),
+                config.depth_fallback_extrapolate.then(|| {
+                    let start = apply_step(&anchor, &self.center_obj, &(self.velocity * span));
+                    (FallbackStart::Extrapolated, start)
+                }),
+                config
+                    .depth_fallback_anchored
+                    .then(|| self.anchored_extrapolation(exposed_us, config))
+                    .flatten()
+                    .map(|start| (FallbackStart::AnchoredMotion, start)),
+            ]
+        });
+        // One ROI around the estimate and every start: the frame's points are rendered once.
+        let camera = self.roi_covering(
+            then,
+            starts.iter().flatten().flatten().map(|s| &s.1),
+            inputs,
+            config,
+        )?;
         let mut image = std::mem::take(&mut self.late_depth);
-        let estimate = self.settle_at_exposure(then, inputs, config, &mut image);
-        let Some(estimate) = estimate else {
-            self.late_depth = image;
-            return None;
-        };
-        let anchor = self.anchor.filter(|&(t, _)| t < exposed_us);
-        let Some((t_anchor, anchor)) =
-            anchor.filter(|_| use_events && config.depth_fallback_margin >= 0.0)
-        else {
+        self.carried.render(then, &camera, &mut image);
+        let estimate = self.settle_at_exposure(then, &camera, &image, config);
+        let Some(starts) = starts else {
             self.late_depth = image;
             return Some(estimate);
         };
-        let span = (exposed_us - t_anchor) as f64 * 1e-6;
-        let starts = [
-            Some((FallbackStart::PreviousDepthPose, anchor)),
-            config.depth_fallback_extrapolate.then(|| {
-                let start = apply_step(&anchor, &self.center_obj, &(self.velocity * span));
-                (FallbackStart::Extrapolated, start)
-            }),
-            config
-                .depth_fallback_anchored
-                .then(|| self.anchored_extrapolation(exposed_us, config))
-                .flatten()
-                .map(|start| (FallbackStart::AnchoredMotion, start)),
-        ];
         let mut check = DepthFallbackCheck {
             object: usize::from(self.label) - 1,
             t_us: exposed_us,
@@ -148,9 +154,7 @@ impl ObjectTrack {
         let mut settled = [None; FALLBACK_STARTS];
         for (k, start) in starts.into_iter().enumerate() {
             let Some((kind, from)) = start else { continue };
-            let Some(s) = self.settle_at_exposure(&from, inputs, config, &mut image) else {
-                continue;
-            };
+            let s = self.settle_at_exposure(&from, &camera, &image, config);
             check.candidates[k] = Some(FallbackCandidate {
                 start: kind,
                 pose: s.pose,
@@ -172,23 +176,51 @@ impl ObjectTrack {
         }
     }
 
-    /// `start`, a pose at the late frame's exposure, refined on the registered frame's depth alone in the ROI
-    /// around it (the model view of this tick's render, placed there); `start` itself if the depth agrees no
-    /// better after. `None` when `start` has no ROI (out of view). `image` is scratch for the frame's depth in
-    /// that ROI.
+    /// The camera of the ROI around the object at `then` (as at a tick), widened to take in the object at each of
+    /// `others` when their centres lie more than a tenth of its diameter apart; `None` when out of view.
+    fn roi_covering<'a>(
+        &self,
+        then: &Isometry3<f64>,
+        others: impl Iterator<Item = &'a Isometry3<f64>>,
+        inputs: &TickInputs<'_>,
+        config: &TrackerConfig,
+    ) -> Option<PinholeCamera> {
+        let c0 = self.center_at(then);
+        let (mut lo, mut hi) = (c0.coords, c0.coords);
+        for p in others {
+            let c = self.center_at(p).coords;
+            if c.iter().all(|v| v.is_finite()) {
+                lo = lo.inf(&c);
+                hi = hi.sup(&c);
+            }
+        }
+        let gap = (hi - lo).norm();
+        let roi = if gap > 0.1 * self.diameter {
+            let c = Point3::from((lo + hi) * 0.5);
+            if c.z <= 1e-3 {
+                return None;
+            }
+            let scale = config.roi_scale + gap / self.diameter;
+            Roi::around_object(inputs.camera, &c, self.diameter, scale, config.roi_size).ok()?
+        } else {
+            self.roi_at(then, inputs.camera, config, inputs.t_us, false)?
+        };
+        Some(inputs.camera.crop(&roi))
+    }
+
+    /// `start`, a pose at the late frame's exposure, refined on the frame's depth alone (`image`, rendered in
+    /// `camera`), with the model view of this tick's render placed there; `start` itself if the depth agrees no
+    /// better after.
     fn settle_at_exposure(
         &self,
         start: &Isometry3<f64>,
-        inputs: &TickInputs<'_>,
+        camera: &PinholeCamera,
+        image: &DepthImage,
         config: &TrackerConfig,
-        image: &mut DepthImage,
-    ) -> Option<Settled> {
-        let roi = self.roi_at(start, inputs.camera, config, inputs.t_us, false)?;
-        let camera = inputs.camera.crop(&roi);
-        self.carried.render(start, &camera, image);
-        let (refined, stats) = self.refine_on_depth_in(*start, &camera, image, config);
-        let before = config.depth_term.stats(&self.view, start, &camera, image);
-        Some(if seen_agreement(&stats) >= seen_agreement(&before) {
+    ) -> Settled {
+        let (refined, stats) = self.refine_on_depth_in(*start, camera, image, config);
+        let before = config.depth_term.stats(&self.view, start, camera, image);
+        if seen_agreement(&stats) >= seen_agreement(&before) {
             Settled {
                 pose: refined,
                 stats,
@@ -198,6 +230,6 @@ impl ObjectTrack {
                 pose: *start,
                 stats: before,
             }
-        })
+        }
     }
 }

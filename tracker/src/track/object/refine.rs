@@ -1,7 +1,7 @@
 //! The per-tick refinement of one object: events, carried depth and intensity in a few Gauss-Newton steps,
 //! with the depth-only safety net at fresh depth frames.
 
-use super::depth_check::seen_agreement;
+use super::depth_check::{seen_agreement, weaker_fit};
 use super::{ObjectTrack, TickInputs, add_prior};
 use crate::refine::{EventTermKind, NormalEquations, StepBounds, apply_step, solve_step};
 use crate::track::config::{DepthUse, TrackerConfig};
@@ -424,8 +424,11 @@ impl ObjectTrack {
         } else {
             None
         };
+        // A late frame's evidence is the weaker of its agreement at the exposure, with the pose checked there,
+        // and at the tick, where its object part agrees with the events' motion by construction but its
+        // background and hand stay where they were measured.
         let fit = if late {
-            late_fit
+            weaker_fit(late_fit, depth_stats)
         } else {
             depth_stats.filter(|_| depth_weight >= 1.0)
         };
