@@ -4,7 +4,7 @@
 //! shared inputs and writes only its probe and its result, so the split changes nothing in the results.
 
 use super::lost_search::PendingPlace;
-use super::threads::{ObjectThreads, SharedMut};
+use super::threads::{ObjectThreads, ShareRenderers, ShareSlice};
 use crate::geometry::PinholeCamera;
 use crate::render::{RenderTarget, Renderer, Scene, SceneObject};
 use crate::track::config::TrackerConfig;
@@ -127,39 +127,32 @@ impl PlaceCheck<'_> {
         workers: &mut [Box<dyn Renderer + Send>],
         threads: &mut ObjectThreads,
     ) -> u64 {
-        let Some((own_set, other_sets)) = sets.split_first_mut() else {
+        if sets.is_empty() {
             return 0;
-        };
+        }
         // Places with a result slot (the caller gives every place one).
         let len = places.len().min(results.len());
-        let parts = (1 + workers.len().min(other_sets.len())).min(len);
+        let parts = (1 + workers.len().min(sets.len() - 1)).min(len);
         if parts <= 1 {
-            return self.run(places, results, own_set, renderer);
+            return self.run(places, results, &mut sets[0], renderer);
         }
         let per_thread = len.div_ceil(parts);
-        // At most `parts` shares, each starting below `len`, so share `i > 0` has worker `i - 1` and probe set
-        // `i - 1` of `other_sets`.
+        // At most `parts` shares, each starting below `len`, so share `i` has renderer `i` and probe set `i`.
         let shares = len.div_ceil(per_thread);
-        let results_at = SharedMut::new(results.as_mut_ptr());
-        let own = SharedMut::new(own_set as *mut ProbeSet);
-        let sets_at = SharedMut::new(other_sets.as_mut_ptr());
-        let own_renderer = SharedMut::new(renderer as *mut (dyn Renderer + '_));
-        let workers_at = SharedMut::new(workers.as_mut_ptr());
+        let results = ShareSlice::new(results);
+        let sets = ShareSlice::new(sets);
+        let renderers = ShareRenderers::new(renderer, workers);
         threads.run(shares - 1, &|i| {
             let start = i * per_thread;
             let end = (start + per_thread).min(len);
-            // SAFETY: share `i` writes `results[start..end]` only, disjoint from the other shares' ranges, and uses
-            // its own probe set and renderer (this thread's for share 0, number `i - 1` of the others otherwise);
-            // `run` runs each share once while they are borrowed here.
+            // SAFETY: share `i` takes `results[start..end]`, disjoint from the other shares' ranges, and probe set
+            // `i` and renderer `i`, which no other share takes; `run` runs each share once.
             let (results, set, renderer) = unsafe {
-                let results =
-                    std::slice::from_raw_parts_mut(results_at.get().add(start), end - start);
-                if i == 0 {
-                    (results, &mut *own.get(), &mut *own_renderer.get())
-                } else {
-                    let renderer: &mut dyn Renderer = (*workers_at.get().add(i - 1)).as_mut();
-                    (results, &mut *sets_at.get().add(i - 1), renderer)
-                }
+                (
+                    results.range(start..end),
+                    &mut sets.range(i..i + 1)[0],
+                    renderers.get(i),
+                )
             };
             self.run(&places[start..end], results, set, renderer)
         })

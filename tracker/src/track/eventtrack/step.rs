@@ -6,7 +6,7 @@ use crate::render::{Renderer, Scene};
 use crate::track::config::TrackerConfig;
 use crate::track::object::{ObjectTrack, TickInputs};
 
-use super::threads::{ObjectThreads, SharedMut};
+use super::threads::{ObjectThreads, ShareRenderers, ShareSlice};
 
 /// What stepping one object at a tick needs besides the object and a renderer (shared, read-only).
 pub(super) struct ObjectStep<'a> {
@@ -69,25 +69,14 @@ impl ObjectStep<'_> {
         let len = objects.len();
         // At most `workers.len() + 1` shares (see `own_share`).
         let shares = len.div_ceil(per_thread);
-        let objects_at = SharedMut::new(objects.as_mut_ptr());
-        let own_renderer = SharedMut::new(renderer as *mut (dyn Renderer + '_));
-        let workers_at = SharedMut::new(workers.as_mut_ptr());
+        let objects = ShareSlice::new(objects);
+        let renderers = ShareRenderers::new(renderer, workers);
         threads.run(shares - 1, &|i| {
             let start = i * per_thread;
             let end = (start + per_thread).min(len);
-            // SAFETY: share `i` is `objects[start..end]`, disjoint from the other shares' ranges, and `run` runs
-            // each share once while `objects` is borrowed here; renderer `i` (this thread's for share 0, worker
-            // `i - 1` otherwise, `i <= workers.len()`) is used by that share alone.
-            let (share, renderer) = unsafe {
-                let share =
-                    std::slice::from_raw_parts_mut(objects_at.get().add(start), end - start);
-                let renderer: &mut dyn Renderer = if i == 0 {
-                    &mut *own_renderer.get()
-                } else {
-                    (*workers_at.get().add(i - 1)).as_mut()
-                };
-                (share, renderer)
-            };
+            // SAFETY: share `i` takes `objects[start..end]`, disjoint from the other shares' ranges, and renderer
+            // `i` (`i <= workers.len()`), which no other share takes; `run` runs each share once.
+            let (share, renderer) = unsafe { (objects.range(start..end), renderers.get(i)) };
             self.run(share, renderer)
         })
     }

@@ -3,7 +3,10 @@
 //! thread, so they inherit its scheduling (the runtime's `SCHED_FIFO`), and are woken per tick through bounded
 //! channels: a tick spawns no thread and allocates nothing.
 
+use crate::render::Renderer;
 use std::any::Any;
+use std::marker::PhantomData;
+use std::ops::Range;
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::thread::JoinHandle;
@@ -34,26 +37,86 @@ impl Drop for Outstanding<'_> {
     }
 }
 
-/// A pointer to data a tick's shares use, each share a disjoint part of it (the caller's promise, checked where
-/// it is dereferenced).
-pub(super) struct SharedMut<T: ?Sized>(*mut T);
+/// A slice a tick's shares each take a disjoint range of ([`Self::range`]), from threads of their own.
+pub(super) struct ShareSlice<'a, T> {
+    ptr: *mut T,
+    len: usize,
+    _borrow: PhantomData<&'a mut [T]>,
+}
 
-impl<T: ?Sized> SharedMut<T> {
-    /// Wraps `ptr`.
-    pub(super) fn new(ptr: *mut T) -> Self {
-        Self(ptr)
+impl<'a, T> ShareSlice<'a, T> {
+    /// Shares `items` for as long as they are borrowed here.
+    pub(super) fn new(items: &'a mut [T]) -> Self {
+        Self {
+            ptr: items.as_mut_ptr(),
+            len: items.len(),
+            _borrow: PhantomData,
+        }
     }
 
-    /// The pointer (a method, so that a closure captures the whole wrapper rather than its field).
-    pub(super) fn get(&self) -> *mut T {
-        self.0
+    /// `items[range]`. Panics if the range is out of bounds.
+    ///
+    /// # Safety
+    /// Ranges taken while another is in use must be disjoint from it.
+    #[allow(clippy::mut_from_ref)]
+    pub(super) unsafe fn range(&self, range: Range<usize>) -> &'a mut [T] {
+        assert!(
+            range.start <= range.end && range.end <= self.len,
+            "{range:?} of {}",
+            self.len
+        );
+        // SAFETY: in bounds (checked above) of a slice borrowed mutably for 'a; the caller keeps ranges disjoint.
+        unsafe {
+            std::slice::from_raw_parts_mut(self.ptr.add(range.start), range.end - range.start)
+        }
     }
 }
 
-// SAFETY: only the pointer is shared; each share dereferences a part no other share touches.
-unsafe impl<T: ?Sized> Send for SharedMut<T> {}
+// SAFETY: only disjoint ranges are handed out (the promise of `range`), each to one thread.
+unsafe impl<T: Send> Send for ShareSlice<'_, T> {}
 // SAFETY: as above.
-unsafe impl<T: ?Sized> Sync for SharedMut<T> {}
+unsafe impl<T: Send> Sync for ShareSlice<'_, T> {}
+
+/// The renderers of a tick split into shares: share 0 renders with the tracker thread's own renderer, share
+/// `i > 0` with worker `i - 1`.
+pub(super) struct ShareRenderers<'a> {
+    own: *mut (dyn Renderer + 'a),
+    workers: ShareSlice<'a, Box<dyn Renderer + Send>>,
+}
+
+impl<'a> ShareRenderers<'a> {
+    /// Shares `own` and `workers` for as long as they are borrowed here.
+    pub(super) fn new(
+        own: &'a mut dyn Renderer,
+        workers: &'a mut [Box<dyn Renderer + Send>],
+    ) -> Self {
+        Self {
+            own,
+            workers: ShareSlice::new(workers),
+        }
+    }
+
+    /// The renderer of share `i`. Panics if there is none (`i` greater than the number of workers).
+    ///
+    /// # Safety
+    /// No two shares in use at once may take the same `i`.
+    #[allow(clippy::mut_from_ref)]
+    pub(super) unsafe fn get(&self, i: usize) -> &'a mut dyn Renderer {
+        if i == 0 {
+            // SAFETY: borrowed mutably for 'a; share 0 alone takes it (the caller's promise).
+            unsafe { &mut *self.own }
+        } else {
+            // SAFETY: worker `i - 1` alone, taken by share `i` alone (the caller's promise).
+            unsafe { self.workers.range(i - 1..i)[0].as_mut() }
+        }
+    }
+}
+
+// SAFETY: each renderer is taken by one share at a time (the promise of `get`). Share 0, which takes the own
+// renderer, runs on the tracker's thread that lent it.
+unsafe impl Send for ShareRenderers<'_> {}
+// SAFETY: as above.
+unsafe impl Sync for ShareRenderers<'_> {}
 
 /// One share of a tick's work: run `work(index)`.
 struct Share {
