@@ -37,21 +37,31 @@ fn moving_marker() -> (tempfile::TempDir, Recording) {
     (dir, recording)
 }
 
+/// The ground truth of `name` in `recording`, the first tick's time and a tracker with the default config started
+/// there at the true pose.
+fn tracker_from_truth(recording: &Recording, name: &str) -> (PoseTrack, i64, EventTrack6d) {
+    let gt = recording.ground_truth.clone().expect("ground truth");
+    let truth = PoseTrack::from_samples(&gt, name);
+    let first = recording_ticks(recording).expect("ticks")[0].t_us;
+    let pose = truth.interpolated_at(first).expect("first pose");
+    let object = recording_object(recording, name, first, pose).expect("model");
+    let rig = recording_rig(recording).expect("rig");
+    let tracker = EventTrack6d::new(
+        TrackerConfig::default(),
+        rig,
+        vec![object],
+        Box::new(CpuRenderer::new()),
+    )
+    .expect("tracker");
+    (truth, first, tracker)
+}
+
 #[test]
 fn the_fallback_record_matches_what_the_tracker_published() {
     let (_dir, recording) = moving_marker();
-    let gt = recording.ground_truth.clone().expect("ground truth");
-    let truth = PoseTrack::from_samples(&gt, "marker");
-    let ticks = recording_ticks(&recording).expect("ticks");
-    let first = ticks[0].t_us;
-    let pose = truth.interpolated_at(first).expect("first pose");
-    let object = recording_object(&recording, "marker", first, pose).expect("model");
-    let rig = recording_rig(&recording).expect("rig");
-    let config = TrackerConfig::default();
-    let rule = config.fallback_rule();
+    let (truth, first, mut tracker) = tracker_from_truth(&recording, "marker");
+    let rule = TrackerConfig::default().fallback_rule();
     let motion_margin = rule.motion_margin;
-    let mut tracker = EventTrack6d::new(config, rig, vec![object], Box::new(CpuRenderer::new()))
-        .expect("tracker");
 
     let mut checks = Vec::new();
     let mut ticks_with_check = Vec::new();
@@ -268,19 +278,11 @@ impl PoseTracker for KnockedOff {
 fn late_frames_are_checked_at_their_exposure() {
     let dir = tempfile::tempdir().unwrap();
     let recording = mug_recording(&dir.path().join("mug"), 1.0);
-    let gt = recording.ground_truth.clone().expect("ground truth");
-    let truth = PoseTrack::from_samples(&gt, "mug");
-    let ticks = recording_ticks(&recording).expect("ticks");
-    let first = ticks[0].t_us;
-    let pose = truth.interpolated_at(first).expect("first pose");
-    let object = recording_object(&recording, "mug", first, pose).expect("model");
-    let rig = recording_rig(&recording).expect("rig");
-    let config = TrackerConfig::default();
-    let rule = config.fallback_rule();
-    let inner = EventTrack6d::new(config, rig, vec![object], Box::new(CpuRenderer::new()))
-        .expect("tracker");
+    let (truth, first, inner) = tracker_from_truth(&recording, "mug");
+    let rule = TrackerConfig::default().fallback_rule();
     // Knocked off at the 11th depth exposure.
-    let knock = ticks
+    let knock = recording_ticks(&recording)
+        .expect("ticks")
         .iter()
         .filter(|t| t.depth_frame.is_some())
         .nth(10)

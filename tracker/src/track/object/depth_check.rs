@@ -6,6 +6,7 @@ use crate::geometry::PinholeCamera;
 use crate::recon::{DepthImage, DepthRig};
 use crate::refine::{DepthTermStats, NormalEquations, StepBounds, apply_step, solve_step};
 use crate::track::config::TrackerConfig;
+use crate::track::fallback_check::{FALLBACK_STARTS, FallbackStart};
 use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Vector6};
 
@@ -76,6 +77,32 @@ impl ObjectTrack {
             inputs.depth_rig,
             config.depth_term.occlusion_gap as f32,
         )
+    }
+
+    /// Where the depth safety net's candidates for the pose at `t_us` start, in [`FallbackStart`] order: the pose
+    /// `anchor` of the previous depth frame (exposed at `t_anchor`, microseconds) and, as configured, that pose
+    /// carried on to `t_us` at the tracker's velocity and at the motion between the two depth frames before. None
+    /// of them depends on what the events did since `t_anchor`.
+    pub(super) fn fallback_starts(
+        &self,
+        t_anchor: i64,
+        anchor: &Isometry3<f64>,
+        t_us: i64,
+        config: &TrackerConfig,
+    ) -> [Option<(FallbackStart, Isometry3<f64>)>; FALLBACK_STARTS] {
+        let span = (t_us - t_anchor).max(0) as f64 * 1e-6;
+        [
+            Some((FallbackStart::PreviousDepthPose, *anchor)),
+            config.depth_fallback_extrapolate.then(|| {
+                let start = apply_step(anchor, &self.center_obj, &(self.velocity * span));
+                (FallbackStart::Extrapolated, start)
+            }),
+            config
+                .depth_fallback_anchored
+                .then(|| self.anchored_extrapolation(t_us, config))
+                .flatten()
+                .map(|start| (FallbackStart::AnchoredMotion, start)),
+        ]
     }
 
     /// Depth-only refinement from `start` against `self.depth_now` (what `depth30` does at a depth frame): the

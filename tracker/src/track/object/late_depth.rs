@@ -6,11 +6,9 @@ use super::depth_check::seen_agreement;
 use super::{ObjectTrack, TickInputs};
 use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::{DepthImage, DepthRig};
-use crate::refine::{DepthTermStats, apply_step};
+use crate::refine::DepthTermStats;
 use crate::track::config::TrackerConfig;
-use crate::track::fallback_check::{
-    DepthFallbackCheck, FALLBACK_STARTS, FallbackCandidate, FallbackStart,
-};
+use crate::track::fallback_check::{DepthFallbackCheck, FALLBACK_STARTS, FallbackCandidate};
 use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Point3};
 
@@ -107,21 +105,8 @@ impl ObjectTrack {
         let anchor = self
             .anchor
             .filter(|&(t, _)| t < exposed_us && use_events && config.depth_fallback_margin >= 0.0);
-        let starts = anchor.map(|(t_anchor, anchor)| {
-            let span = (exposed_us - t_anchor) as f64 * 1e-6;
-            [
-                Some((FallbackStart::PreviousDepthPose, anchor)),
-                config.depth_fallback_extrapolate.then(|| {
-                    let start = apply_step(&anchor, &self.center_obj, &(self.velocity * span));
-                    (FallbackStart::Extrapolated, start)
-                }),
-                config
-                    .depth_fallback_anchored
-                    .then(|| self.anchored_extrapolation(exposed_us, config))
-                    .flatten()
-                    .map(|start| (FallbackStart::AnchoredMotion, start)),
-            ]
-        });
+        let starts = anchor
+            .map(|(t_anchor, anchor)| self.fallback_starts(t_anchor, &anchor, exposed_us, config));
         // One ROI around the estimate and every start: the frame's points are rendered once.
         let camera = self.roi_covering(
             then,

@@ -6,9 +6,7 @@ use super::{ObjectTrack, TickInputs, add_prior};
 use crate::refine::{EventTermKind, NormalEquations, StepBounds, apply_step, solve_step};
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::estimate::TrackingState;
-use crate::track::fallback_check::{
-    DepthFallbackCheck, FALLBACK_STARTS, FallbackCandidate, FallbackStart,
-};
+use crate::track::fallback_check::{DepthFallbackCheck, FALLBACK_STARTS, FallbackCandidate};
 use nalgebra::{Isometry3, Translation3, Vector3, Vector6};
 
 /// The depth a tick's refinement uses, prepared by [`ObjectTrack::prepare_depth`] before the ROI render is taken.
@@ -349,21 +347,7 @@ impl ObjectTrack {
             && config.depth_fallback_margin >= 0.0
             && let Some((t_anchor, anchor)) = self.anchor
         {
-            // Starts: the previous depth frame's pose and, optionally, that pose carried on at the velocity
-            // measured between depth frames (neither depends on what the events did since).
-            let span = (inputs.t_us - t_anchor).max(0) as f64 * 1e-6;
-            let starts = [
-                Some((FallbackStart::PreviousDepthPose, anchor)),
-                config.depth_fallback_extrapolate.then(|| {
-                    let start = apply_step(&anchor, &self.center_obj, &(self.velocity * span));
-                    (FallbackStart::Extrapolated, start)
-                }),
-                config
-                    .depth_fallback_anchored
-                    .then(|| self.anchored_extrapolation(inputs.t_us, config))
-                    .flatten()
-                    .map(|start| (FallbackStart::AnchoredMotion, start)),
-            ];
+            let starts = self.fallback_starts(t_anchor, &anchor, inputs.t_us, config);
             let main_stats = self.depth_stats_at(&pose, &roi_camera, config);
             let mut check = DepthFallbackCheck {
                 object: usize::from(self.label) - 1,
