@@ -5,9 +5,10 @@
 use super::EventTrack6d;
 use super::place_check::{PlaceCheck, PlaceResult, ProbeSet};
 use crate::geometry::PinholeCamera;
+use crate::render::SceneObject;
 use crate::track::TrackingState;
 use crate::track::config::{DepthUse, TrackerConfig};
-use crate::track::object::TickInputs;
+use crate::track::object::{ObjectTrack, TickInputs};
 use crate::track::redetect::{Cluster, DepthBackground, cluster_centres};
 use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -19,8 +20,8 @@ pub(super) struct PendingPlace {
     pub(super) object: usize,
     /// Start of the depth-only refinement, `T_cam_obj`.
     pub(super) start: Isometry3<f64>,
-    /// Whether this is where the tracker predicted the object (the score to beat).
-    pub(super) predicted: bool,
+    /// Whether this is where the tracker estimated the object at the frame's exposure (the score to beat).
+    pub(super) estimated: bool,
 }
 
 /// One object's search in progress.
@@ -43,9 +44,12 @@ pub(super) struct Redetection {
     pub(super) foreground: Vec<Point3<f64>>,
     pub(super) seeds: Vec<(usize, Point3<f64>)>,
     pub(super) centres: Vec<Cluster>,
-    /// Places still to check, in order, against the depth frame `frame` (index, tick time in microseconds).
+    /// Places still to check, in order, against the depth frame `frame` (index, exposure time in microseconds).
     pub(super) pending: VecDeque<PendingPlace>,
     pub(super) frame: Option<(u64, i64)>,
+    /// Every object where it was estimated at `frame`'s exposure (predicted, for a frame on time): the places
+    /// are checked with the others there.
+    pub(super) scene: Vec<SceneObject>,
     /// Per object: the search's results so far.
     pub(super) searches: Vec<Search>,
     /// The places being checked at this tick and their results.
@@ -56,14 +60,15 @@ pub(super) struct Redetection {
 }
 
 impl Redetection {
-    /// Empty re-detection state for `objects` objects seen by the depth camera `depth_cam`, with `probes` (one
-    /// set per renderer) to check places in.
+    /// Empty re-detection state for the objects of `scene` seen by the depth camera `depth_cam`, with `probes`
+    /// (one set per renderer) to check places in.
     pub(super) fn new(
         config: &TrackerConfig,
-        objects: usize,
+        scene: &[SceneObject],
         depth_cam: &PinholeCamera,
         probes: Vec<ProbeSet>,
     ) -> Self {
+        let objects = scene.len();
         let places = objects * (1 + 2 * config.redetect.candidates);
         let cell = config.redetect.cell_px.max(1);
         Self {
@@ -76,6 +81,7 @@ impl Redetection {
             centres: Vec::with_capacity(config.redetect.candidates),
             pending: VecDeque::with_capacity(places),
             frame: None,
+            scene: scene.to_vec(),
             searches: vec![Search::default(); objects],
             checks: Vec::with_capacity(places),
             results: Vec::with_capacity(places),
@@ -93,16 +99,29 @@ impl Redetection {
 }
 
 impl EventTrack6d {
-    /// At a depth frame: plans the search for every object that needs one (not `tracking`, and not merely
-    /// partly hidden; see [`crate::track::object::ObjectTrack::needs_search`]): where it is predicted, then
-    /// the object-sized clusters of foreground (with the predicted orientation and with its longest axis along
-    /// the cluster's). Places left over from the previous frame are dropped and counted.
-    pub(super) fn plan_redetection(&mut self, t_us: i64) {
+    /// At a depth frame exposed at `exposed_us` and used at the tick `t_us`: plans the search for every object
+    /// that needs one (not `tracking`, and not merely partly hidden; see
+    /// [`crate::track::object::ObjectTrack::needs_search`]): where it was estimated at the exposure (predicted,
+    /// for a frame on time), then the object-sized clusters of foreground (with that orientation and with its
+    /// longest axis along the cluster's). A late frame shows where the object was at its exposure, so it is
+    /// searched for there; an object whose estimates do not reach back to the exposure is not searched for on
+    /// that frame. Places left over from the previous frame are dropped and counted.
+    pub(super) fn plan_redetection(&mut self, t_us: i64, exposed_us: i64) {
         let cfg = self.config.redetect;
         let r = &mut self.redetection;
         self.counters.redetect_places_dropped += r.pending.len() as u64;
         r.pending.clear();
-        r.frame = Some((self.depth.index, t_us));
+        r.frame = Some((self.depth.index, exposed_us));
+        let at_frame = |o: &ObjectTrack| {
+            if exposed_us < t_us {
+                o.history().at(exposed_us)
+            } else {
+                Some(o.predicted)
+            }
+        };
+        for (s, o) in r.scene.iter_mut().zip(&self.objects) {
+            s.pose = at_frame(o).unwrap_or(o.predicted);
+        }
         let mut foreground_ready = false;
         for k in 0..self.objects.len() {
             let o = &self.objects[k];
@@ -110,6 +129,9 @@ impl EventTrack6d {
             if !o.needs_search(&self.config.quality) || t_us < o.t_us {
                 continue;
             }
+            let Some(here) = at_frame(o) else {
+                continue;
+            };
             if !foreground_ready {
                 r.catch_up(&self.depth);
                 r.foreground.clear();
@@ -135,8 +157,7 @@ impl EventTrack6d {
             if r.centres.is_empty() {
                 continue;
             }
-            let predicted = o.predicted;
-            let predicted_centre = o.center_at(&predicted);
+            let here_centre = o.center_at(&here);
             // Samples the object's two largest box extents cover at 1 m.
             let size = o.aabb_max - o.aabb_min;
             // The object's longest box axis, object frame.
@@ -150,36 +171,36 @@ impl EventTrack6d {
             let before = r.pending.len();
             r.pending.push_back(PendingPlace {
                 object: k,
-                start: predicted,
-                predicted: true,
+                start: here,
+                estimated: true,
             });
             for cluster in &r.centres {
                 let centre = cluster.centre;
-                if (centre - predicted_centre).norm() < 0.25 * o.diameter
+                if (centre - here_centre).norm() < 0.25 * o.diameter
                     || (cluster.support as f64)
                         < (min_support / (centre.z * centre.z).max(1e-6)).max(8.0)
                 {
                     continue;
                 }
-                // Orientations: the predicted one, and the predicted one turned the least that lays the
+                // Orientations: the estimated one, and the estimated one turned the least that lays the
                 // object's longest axis along the cluster's principal axis.
-                let current = predicted.rotation * long_axis;
+                let current = here.rotation * long_axis;
                 let target = if current.dot(&cluster.axis) >= 0.0 {
                     cluster.axis
                 } else {
                     -cluster.axis
                 };
                 let aligned = UnitQuaternion::rotation_between(&current, &target)
-                    .map(|q| q * predicted.rotation)
+                    .map(|q| q * here.rotation)
                     .filter(|_| current.angle(&target) > 15f64.to_radians());
-                for rotation in [Some(predicted.rotation), aligned].into_iter().flatten() {
+                for rotation in [Some(here.rotation), aligned].into_iter().flatten() {
                     r.pending.push_back(PendingPlace {
                         object: k,
                         start: Isometry3::from_parts(
                             Translation3::from(centre.coords - rotation * o.center_obj),
                             rotation,
                         ),
-                        predicted: false,
+                        estimated: false,
                     });
                 }
             }
@@ -189,9 +210,10 @@ impl EventTrack6d {
 
     /// Checks up to `places_per_tick` pending places (all of them when it is 0, or for a tracker that refines only
     /// at depth frames) against the depth frame they were planned on, split over the tracker's threads; an object
-    /// whose search is complete moves to its best place if that scores clearly better than the prediction did. A
-    /// search is abandoned when the object is `tracking` again. Every check of a tick sees the other objects where
-    /// they are predicted; the moves are made after all of them.
+    /// whose search is complete moves to its best place if that scores clearly better than its estimate did. A
+    /// search is abandoned when the object is `tracking` again. Every check sees the other objects where they were
+    /// at the frame's exposure; the moves are made after all of them. A place found on a late frame is where the
+    /// object was at its exposure ([`ObjectTrack::relocate_on`] says how it is carried on).
     pub(super) fn continue_redetection(&mut self, dt_s: f64) {
         let cfg = self.config.redetect;
         // A tracker that refines only at depth frames (`depth30`) has no ticks in between to spread over.
@@ -228,7 +250,7 @@ impl EventTrack6d {
         r.results.resize(r.checks.len(), None);
         let check = PlaceCheck {
             objects: &self.objects,
-            scene: &self.scene,
+            scene: &r.scene,
             camera: &self.rig.event_camera,
             config: &self.config,
             inputs: TickInputs {
@@ -253,7 +275,7 @@ impl EventTrack6d {
             let k = place.object;
             let search = &mut r.searches[k];
             search.remaining -= 1;
-            if place.predicted {
+            if place.estimated {
                 search.here = result.map_or(0.0, |(score, _)| score);
             } else if let Some((score, pose)) = *result
                 && search.best.is_none_or(|(b, _)| score > b)
@@ -266,8 +288,7 @@ impl EventTrack6d {
                 && score > search.here + cfg.margin
             {
                 let o = &mut self.objects[k];
-                o.relocate(pose);
-                o.carry_depth_from(&self.depth, &self.rig.depth, frame_t_us, &self.config);
+                o.relocate_on(&self.depth, &self.rig.depth, pose, frame_t_us, &self.config);
                 self.scene[k].pose = o.predicted;
             }
         }

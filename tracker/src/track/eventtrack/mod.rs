@@ -152,7 +152,7 @@ impl EventTrack6d {
             Vec::new()
         };
         let depth_cam = rig.depth.camera;
-        let redetection = Redetection::new(&config, objects_len, &depth_cam, probes);
+        let redetection = Redetection::new(&config, &scene, &depth_cam, probes);
         let cam = rig.event_camera;
         // `I_t` is reconstructed only where something reads it: the event term needs the latest times alone.
         let surface = if config.intensity.always || config.intensity_term.weight > 0.0 {
@@ -361,7 +361,7 @@ impl PoseTracker for EventTrack6d {
             if depth_now {
                 // Off the tick's latency unless planning reads it (the frame is cold in cache in a live run).
                 self.redetection.background_behind = true;
-                self.plan_redetection(t_us);
+                self.plan_redetection(t_us, exposed_us.unwrap_or(t_us));
             }
             self.continue_redetection(dt_s);
         }

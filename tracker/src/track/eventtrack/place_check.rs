@@ -1,7 +1,8 @@
 //! Checking the places of a re-detection search: each place is a depth-only refinement from a start pose, done in
-//! a scratch track of its own (a probe) and rendered with the other objects where they are predicted. A tick's
-//! checks are split over the tracker's renderers, one thread each, like the objects' steps; every check reads only
-//! shared inputs and writes only its probe and its result, so the split changes nothing in the results.
+//! a scratch track of its own (a probe) and rendered with the other objects where they were at the frame's
+//! exposure. A tick's checks are split over the tracker's renderers, one thread each, like the objects' steps;
+//! every check reads only shared inputs and writes only its probe and its result, so the split changes nothing in
+//! the results.
 
 use super::lost_search::PendingPlace;
 use super::threads::{ObjectThreads, ShareRenderers, ShareSlice};
@@ -46,11 +47,11 @@ impl ProbeSet {
 pub(super) struct PlaceCheck<'a> {
     /// The tracks, for each probe's motion state.
     pub(super) objects: &'a [ObjectTrack],
-    /// Every object where it is predicted.
+    /// Every object where it was at the frame's exposure.
     pub(super) scene: &'a [SceneObject],
     pub(super) camera: &'a PinholeCamera,
     pub(super) config: &'a TrackerConfig,
-    /// The depth frame the places were planned on, at its tick time.
+    /// The depth frame the places were planned on, at its exposure.
     pub(super) inputs: TickInputs<'a>,
 }
 

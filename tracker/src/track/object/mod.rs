@@ -291,9 +291,48 @@ impl ObjectTrack {
         camera.fx * (lateral + angular) / z
     }
 
-    /// Moves the object to `pose` found by re-detection: the motion estimate and the depth anchor, which belong
-    /// to the place it was lost at, are dropped; the next refinement starts there.
-    pub fn relocate(&mut self, pose: Isometry3<f64>) {
+    /// Moves the object to where re-detection found it on `frame`, exposed at `found_us`: `found` there, carried
+    /// to this tick by the motion estimated since the exposure (none when that is this tick). The
+    /// motion estimate and the depth anchor, which belong to the place it was lost at, are dropped; the next
+    /// refinement starts there. The pose history restarts at the exposure, so that the next frame, late too,
+    /// finds an estimate at its own exposure, and the frame becomes the depth `D_0` carried on.
+    pub fn relocate_on(
+        &mut self,
+        frame: &DepthFrame,
+        rig: &DepthRig,
+        found: Isometry3<f64>,
+        found_us: i64,
+        config: &TrackerConfig,
+    ) {
+        let motion = self
+            .history
+            .at(found_us)
+            .filter(|_| found_us < self.t_us)
+            .map(|then| self.predicted * then.inverse());
+        let now = motion.map_or(found, |m| m * found);
+        let now =
+            if now.translation.vector.iter().all(|v| v.is_finite()) && now.translation.z > 1e-3 {
+                now
+            } else {
+                found
+            };
+        self.relocate(now);
+        self.history.push(found_us, normalise(found));
+        let c_then = self.center_at(&found);
+        let c_now = self.center_at(&self.predicted);
+        let c = Point3::from((c_then.coords + c_now.coords) * 0.5);
+        let radius = 0.6 * config.roi_scale * self.diameter + 0.08 + 0.5 * (c_now - c_then).norm();
+        self.carried.register(frame, rig, &c, radius, found_us);
+        if let Some(m) = motion {
+            self.carried
+                .carry_object_part(&found, &m, &self.aabb_min, &self.aabb_max, 0.01);
+        }
+        self.carried
+            .attach_to_object(&self.predicted, &self.aabb_min, &self.aabb_max, 0.01);
+    }
+
+    /// Moves the object to `pose`: the motion estimate, the depth anchor and the pose history are dropped.
+    fn relocate(&mut self, pose: Isometry3<f64>) {
         self.pose = normalise(pose);
         self.predicted = self.pose;
         self.velocity = Vector6::zeros();
