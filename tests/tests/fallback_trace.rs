@@ -362,7 +362,9 @@ fn late_frames_are_checked_at_their_exposure() {
         winner.start.as_str(),
         off(&winner.pose) * 1e3
     );
-    assert!(off(&c.estimate) > 0.03, "{c:?}");
+    // The check's estimate is the knocked-off one refined on the frame's depth alone, which pulls it part of the
+    // way back (24-49 mm off remain, depending on the motion before); the candidate is on the object.
+    assert!(off(&c.estimate) > 0.02, "{c:?}");
     assert!(off(&winner.pose) < 0.01, "{c:?}");
     let last = tracker.last.expect("a last estimate");
     let end = truth.interpolated_at(last.t_us).expect("truth at the end");

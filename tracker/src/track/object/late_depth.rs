@@ -1,6 +1,7 @@
 //! A depth frame that arrived after its own tick: registered where the object was estimated at its exposure,
-//! checked there by the depth safety net, and its object part carried by the motion estimated since to the tick it
-//! is used at. A late frame tells where the object was, not how it moved since: the events carry that.
+//! checked there by the depth safety net, and its object part carried to the tick it is used at. A late frame
+//! tells where the object was, not how it moved since: the events carry that across the image, and the depth
+//! frames' own motion along the line of sight, where events show little.
 
 use super::depth_check::seen_agreement;
 use super::{ObjectTrack, TickInputs};
@@ -10,7 +11,7 @@ use crate::refine::DepthTermStats;
 use crate::track::config::TrackerConfig;
 use crate::track::fallback_check::{DepthFallbackCheck, FALLBACK_STARTS, FallbackCandidate};
 use drivers::recording::DepthFrame;
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Point3, Translation3};
 
 /// Margin around the object's box, metres, within which a late frame's points count as the object's when they are
 /// carried to the tick (split at the pose chosen at the exposure).
@@ -46,11 +47,12 @@ impl ObjectTrack {
     }
 
     /// For a frame registered by [`Self::register_late_depth`]: chooses the pose at the exposure
-    /// ([`Self::check_at_exposure`]), carries the points in the object's box there by the motion the events
-    /// estimated from the exposure to the prediction, and renders the result into `depth_now` in this tick's ROI.
-    /// Returns the pose the refinement starts from (the prediction moved by what the check changed at the
-    /// exposure) and the depth term's counts at the exposure (`None` when the object was out of view then), part
-    /// of the frame's evidence for quality: at the tick its object part agrees with the start by construction.
+    /// ([`Self::check_at_exposure`]), carries the points in the object's box there to the pose the refinement
+    /// starts from, and renders the result into `depth_now` in this tick's ROI. That start is the prediction moved
+    /// by what the check changed at the exposure, at the range the depth frames' motion reaches
+    /// ([`Self::ranged_by_depth_frames`]). Returns the start and the depth term's counts at the exposure (`None`
+    /// when the object was out of view then), part of the frame's evidence for quality: at the tick its object
+    /// part agrees with the start by construction.
     pub(super) fn carry_late_depth(
         &mut self,
         inputs: &TickInputs<'_>,
@@ -63,7 +65,20 @@ impl ObjectTrack {
         };
         let checked = self.check_at_exposure(&then, exposed_us, inputs, use_events, config);
         let at_exposure = checked.map_or(then, |s| s.pose);
-        let motion = self.predicted * then.inverse();
+        // The prediction moved by what the check changed at the exposure, in the object frame; along the line of
+        // sight, where the events see little, carried on from the exposure by the depth frames' own motion.
+        let start = self.predicted * then.inverse() * at_exposure;
+        let start = self
+            .ranged_by_depth_frames(&at_exposure, exposed_us, &start, inputs.t_us, config)
+            .unwrap_or(start);
+        let start = if start.translation.vector.iter().all(|v| v.is_finite())
+            && start.translation.z > 1e-3
+        {
+            start
+        } else {
+            self.predicted
+        };
+        let motion = start * at_exposure.inverse();
         self.carried.carry_object_part(
             &at_exposure,
             &motion,
@@ -74,16 +89,39 @@ impl ObjectTrack {
         self.late_motion = Some((exposed_us, motion));
         self.carried
             .render(&self.predicted, roi_camera, &mut self.depth_now);
-        // `motion * at_exposure` = the prediction moved by the check's change at the exposure, in the object frame.
-        let start = motion * at_exposure;
-        let start = if start.translation.vector.iter().all(|v| v.is_finite())
-            && start.translation.z > 1e-3
-        {
-            start
-        } else {
-            self.predicted
-        };
         (start, checked.map(|s| s.stats))
+    }
+
+    /// `start`, a pose at the tick `tick_us`, moved along the line of sight through its centre to the range the
+    /// depth frames' own motion carries the object to: from the previous frame's estimate (`anchor`) to
+    /// `at_exposure`, the estimate at this frame's exposure, then on at that speed (capped like the velocity's)
+    /// to the tick. Events show motion across the image, hardly any along the line of sight, so over a late
+    /// frame's age the events' estimate of the range drifts where the depth frames' does not. `None` without a
+    /// previous frame's estimate within 0.1 s before the exposure.
+    fn ranged_by_depth_frames(
+        &self,
+        at_exposure: &Isometry3<f64>,
+        exposed_us: i64,
+        start: &Isometry3<f64>,
+        tick_us: i64,
+        config: &TrackerConfig,
+    ) -> Option<Isometry3<f64>> {
+        let (t0, p0) = self.anchor?;
+        let between = (exposed_us - t0) as f64 * 1e-6;
+        if !(between > 0.0 && between <= 0.1) {
+            return None;
+        }
+        let c1 = self.center_at(at_exposure);
+        let mut v = (c1 - self.center_at(&p0)) / between;
+        if v.norm() > config.max_speed {
+            v *= config.max_speed / v.norm();
+        }
+        let span = (tick_us - exposed_us).max(0) as f64 * 1e-6;
+        let ranged = c1 + v * span;
+        let c = self.center_at(start);
+        let sight = c.coords.try_normalize(1e-9)?;
+        let shift = sight * (ranged - c).dot(&sight);
+        Some(Translation3::from(shift) * start)
     }
 
     /// The depth safety net at a late frame's exposure, where the frame shows the object: the estimate then
@@ -216,5 +254,49 @@ impl ObjectTrack {
                 stats: before,
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{UnitQuaternion, Vector3};
+
+    #[test]
+    fn a_late_start_takes_its_range_from_the_depth_frames_and_its_image_place_from_the_events() {
+        let config = TrackerConfig::default();
+        let at = |x: f64, z: f64| {
+            Isometry3::from_parts(Translation3::new(x, 0.0, z), UnitQuaternion::identity())
+        };
+        let half = Vector3::new(0.05, 0.05, 0.05);
+        let mut track = ObjectTrack::new(1, 0.1, -half, half, at(0.0, 0.6), 0, &[], &config);
+        // Without an estimate at the frame before there is no motion between frames to range by.
+        let start = at(0.03, 0.6);
+        assert!(
+            track
+                .ranged_by_depth_frames(&at(0.0, 0.62), 33_333, &start, 53_333, &config)
+                .is_none()
+        );
+        // The frames say the object moves away at 0.6 m/s; the events' start kept the range it had.
+        track.anchor = Some((0, at(0.0, 0.6)));
+        let ranged = track
+            .ranged_by_depth_frames(&at(0.0, 0.62), 33_333, &start, 53_333, &config)
+            .expect("ranged");
+        let c = ranged.translation.vector;
+        // Where the events put it in the image is kept: the same line of sight.
+        assert!((c.x / c.z - 0.03 / 0.6).abs() < 1e-12, "{c}");
+        assert!(c.y.abs() < 1e-12);
+        // Along it, the range the frames' motion reaches at the tick: 0.62 + 0.6 m/s x 20 ms, projected.
+        let sight = Vector3::new(0.03, 0.0, 0.6).normalize();
+        let expected = Vector3::new(0.0, 0.0, 0.62 + 0.02 / 0.033_333 * 0.02).dot(&sight);
+        assert!((c.dot(&sight) - expected).abs() < 1e-9, "{c}");
+        assert_eq!(ranged.rotation, start.rotation);
+        // An estimate more than 0.1 s before the exposure is too old to say how it moves now.
+        track.anchor = Some((-80_000, at(0.0, 0.6)));
+        assert!(
+            track
+                .ranged_by_depth_frames(&at(0.0, 0.62), 33_333, &start, 53_333, &config)
+                .is_none()
+        );
     }
 }
