@@ -38,11 +38,8 @@ impl ObjectTrack {
         then: &Isometry3<f64>,
         config: &TrackerConfig,
     ) {
-        let c_then = self.center_at(then);
-        let c_now = self.center_at(&self.predicted);
-        let c = Point3::from((c_then.coords + c_now.coords) * 0.5);
-        let radius = 0.6 * config.roi_scale * self.diameter + 0.08 + 0.5 * (c_now - c_then).norm();
-        self.carried.register(frame, rig, &c, radius, exposed_us);
+        let now = self.predicted;
+        self.register_between(frame, rig, then, &now, exposed_us, config);
         self.late_frame = Some((exposed_us, *then));
     }
 

@@ -5,6 +5,7 @@ mod history;
 mod late_depth;
 mod motion;
 mod outcome;
+mod placement;
 mod quality_window;
 mod refine;
 
@@ -291,62 +292,8 @@ impl ObjectTrack {
         camera.fx * (lateral + angular) / z
     }
 
-    /// Moves the object to where re-detection found it on `frame`, exposed at `found_us`: `found` there, carried
-    /// to this tick by the motion estimated since the exposure (none when that is this tick). The
-    /// motion estimate and the depth anchor, which belong to the place it was lost at, are dropped; the next
-    /// refinement starts there. The pose history restarts at the exposure, so that the next frame, late too,
-    /// finds an estimate at its own exposure, and the frame becomes the depth `D_0` carried on.
-    pub fn relocate_on(
-        &mut self,
-        frame: &DepthFrame,
-        rig: &DepthRig,
-        found: Isometry3<f64>,
-        found_us: i64,
-        config: &TrackerConfig,
-    ) {
-        let motion = self
-            .history
-            .at(found_us)
-            .filter(|_| found_us < self.t_us)
-            .map(|then| self.predicted * then.inverse());
-        let now = motion.map_or(found, |m| m * found);
-        let now =
-            if now.translation.vector.iter().all(|v| v.is_finite()) && now.translation.z > 1e-3 {
-                now
-            } else {
-                found
-            };
-        self.relocate(now);
-        self.history.push(found_us, normalise(found));
-        let c_then = self.center_at(&found);
-        let c_now = self.center_at(&self.predicted);
-        let c = Point3::from((c_then.coords + c_now.coords) * 0.5);
-        let radius = 0.6 * config.roi_scale * self.diameter + 0.08 + 0.5 * (c_now - c_then).norm();
-        self.carried.register(frame, rig, &c, radius, found_us);
-        if let Some(m) = motion {
-            self.carried
-                .carry_object_part(&found, &m, &self.aabb_min, &self.aabb_max, 0.01);
-        }
-        self.carried
-            .attach_to_object(&self.predicted, &self.aabb_min, &self.aabb_max, 0.01);
-    }
-
-    /// Moves the object to `pose`: the motion estimate, the depth anchor and the pose history are dropped.
-    fn relocate(&mut self, pose: Isometry3<f64>) {
-        self.pose = normalise(pose);
-        self.predicted = self.pose;
-        self.velocity = Vector6::zeros();
-        self.anchor = None;
-        self.anchor_before = None;
-        self.low_ticks = 0;
-        self.recent_quality.clear();
-        self.history.clear();
-        self.redetections += 1;
-    }
-
     /// Takes the depth of `frame` (exposed at `t_us`) around the prediction as the depth `D_0` carried to the
-    /// following ticks (a sphere reaching past the ROI). Besides every fresh frame, a re-detection calls it: the
-    /// depth carried from the frame before showed the place the object was moved from.
+    /// following ticks (a sphere reaching past the ROI), every point static until it is split.
     pub fn carry_depth_from(
         &mut self,
         frame: &DepthFrame,
@@ -354,31 +301,27 @@ impl ObjectTrack {
         t_us: i64,
         config: &TrackerConfig,
     ) {
-        let c = self.center_at(&self.predicted);
-        let radius = 0.6 * config.roi_scale * self.diameter + 0.08;
+        let predicted = self.predicted;
+        self.register_between(frame, rig, &predicted, &predicted, t_us, config);
+    }
+
+    /// Takes the depth of `frame` (exposed at `t_us`) as the new `D_0`, every point static for now: a sphere
+    /// reaching past the ROI around the object at both `then` and `now`, which lie apart when the frame is used
+    /// later than it was exposed.
+    fn register_between(
+        &mut self,
+        frame: &DepthFrame,
+        rig: &DepthRig,
+        then: &Isometry3<f64>,
+        now: &Isometry3<f64>,
+        t_us: i64,
+        config: &TrackerConfig,
+    ) {
+        let c_then = self.center_at(then);
+        let c_now = self.center_at(now);
+        let c = Point3::from((c_then.coords + c_now.coords) * 0.5);
+        let radius = 0.6 * config.roi_scale * self.diameter + 0.08 + 0.5 * (c_now - c_then).norm();
         self.carried.register(frame, rig, &c, radius, t_us);
-    }
-
-    /// Replaces the latest estimate (see [`super::EventTrack6d::reset_pose`]).
-    pub fn reset(&mut self, t_us: i64, pose: Isometry3<f64>) {
-        self.previous = Some((self.t_us, self.pose));
-        self.pose = normalise(pose);
-        self.predicted = self.pose;
-        self.t_us = t_us;
-        self.history.clear();
-        self.history.push(t_us, self.pose);
-        self.low_ticks = 0;
-        self.recent_quality.clear();
-        self.state = TrackingState::Tracking;
-        self.reported = ReportedState::new(TrackingState::Tracking);
-    }
-
-    /// Holds the latest estimate at `t_us` without refining (`depth30` between depth frames): pose, quality and
-    /// state stay what the last refinement said.
-    pub fn hold(&mut self, t_us: i64) {
-        self.previous = Some((self.t_us, self.pose));
-        self.t_us = t_us;
-        self.history.push(t_us, self.pose);
     }
 }
 
