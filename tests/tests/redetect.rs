@@ -213,7 +213,7 @@ fn with_late_depth_frames_the_object_is_searched_for_where_it_was_at_the_exposur
     // The estimates restart at the exposure, so the next frame, 40 ms late too, still finds one at its own
     // exposure and is used. Before, the search planned as if the frame were current, put the mug where it had
     // been 40 ms before, and the next frames, exposed before that move, could not be placed: the tracker
-    // searched again at every frame and ended lost, 10-16 cm off.
+    // searched again at every frame; near the end it was 9-16 cm off and at times `lost`.
     let late = run_late(&recording, TrackerConfig::default(), 40_000);
     assert!(late.redetections >= 1, "no re-detection");
     assert_eq!(
