@@ -4,6 +4,8 @@
 //! frames' own motion along the line of sight, where events show little.
 
 use super::depth_check::seen_agreement;
+use super::in_front_or;
+use super::motion::cap_motion;
 use super::{ObjectTrack, TickInputs};
 use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::{DepthImage, DepthRig};
@@ -68,13 +70,7 @@ impl ObjectTrack {
         let start = self
             .ranged_by_depth_frames(&at_exposure, exposed_us, &start, inputs.t_us, config)
             .unwrap_or(start);
-        let start = if start.translation.vector.iter().all(|v| v.is_finite())
-            && start.translation.z > 1e-3
-        {
-            start
-        } else {
-            self.predicted
-        };
+        let start = in_front_or(start, self.predicted);
         let motion = start * at_exposure.inverse();
         self.carried.carry_object_part(
             &at_exposure,
@@ -108,13 +104,10 @@ impl ObjectTrack {
         if !(between > 0.0 && between <= 0.1) {
             return None;
         }
-        let c1 = self.center_at(at_exposure);
-        let mut v = (c1 - self.center_at(&p0)) / between;
-        if v.norm() > config.max_speed {
-            v *= config.max_speed / v.norm();
-        }
+        let mut motion = self.observable_motion(&p0, at_exposure, between);
+        cap_motion(&mut motion, config);
         let span = (tick_us - exposed_us).max(0) as f64 * 1e-6;
-        let ranged = c1 + v * span;
+        let ranged = self.center_at(at_exposure) + motion.fixed_rows::<3>(0) * span;
         let c = self.center_at(start);
         let sight = c.coords.try_normalize(1e-9)?;
         let shift = sight * (ranged - c).dot(&sight);

@@ -335,6 +335,16 @@ fn add_prior(ne: &mut NormalEquations, offset: &Vector6<f64>, prior_t: f64, prio
     }
 }
 
+/// `pose` if its translation is finite and in front of the camera (over 1 mm), `fallback` otherwise: a pose
+/// composed from estimates that a degenerate step left unusable.
+fn in_front_or(pose: Isometry3<f64>, fallback: Isometry3<f64>) -> Isometry3<f64> {
+    if pose.translation.vector.iter().all(|v| v.is_finite()) && pose.translation.z > 1e-3 {
+        pose
+    } else {
+        fallback
+    }
+}
+
 /// Re-normalises the rotation (drift from repeated composition).
 fn normalise(pose: Isometry3<f64>) -> Isometry3<f64> {
     Isometry3::from_parts(

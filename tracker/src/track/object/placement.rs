@@ -1,7 +1,7 @@
 //! Where an object is put from outside its refinement: a place re-detection found, an external reset, and the
 //! estimate held between depth frames.
 
-use super::{ObjectTrack, normalise};
+use super::{ObjectTrack, in_front_or, normalise};
 use crate::recon::DepthRig;
 use crate::track::config::TrackerConfig;
 use crate::track::estimate::{ReportedState, TrackingState};
@@ -27,13 +27,7 @@ impl ObjectTrack {
             .at(found_us)
             .filter(|_| found_us < self.t_us)
             .map(|then| self.predicted * then.inverse());
-        let now = motion.map_or(found, |m| m * found);
-        let now =
-            if now.translation.vector.iter().all(|v| v.is_finite()) && now.translation.z > 1e-3 {
-                now
-            } else {
-                found
-            };
+        let now = in_front_or(motion.map_or(found, |m| m * found), found);
         self.relocate(now);
         self.history.push(found_us, normalise(found));
         let now = self.predicted;
