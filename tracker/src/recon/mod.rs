@@ -6,5 +6,5 @@ mod intensity;
 mod neighbourhood;
 
 pub use depth::{CarriedDepth, DepthImage, DepthRig, MAX_CARRIED_POINTS};
-pub use intensity::{EventSurface, IntensityFilterConfig};
+pub use intensity::{EventSurface, IntensityFilterConfig, SurfaceLog};
 pub use neighbourhood::{MIN_MOTION_POINTS, MOTION_TOLERANCE_M, MovingNeighbourhood};

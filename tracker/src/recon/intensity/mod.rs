@@ -10,6 +10,9 @@
 
 use drivers::event::CdEvent;
 
+mod log;
+pub use log::SurfaceLog;
+
 /// Parameters of the log-intensity filter.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
@@ -131,25 +134,37 @@ impl EventSurface {
 
     /// Integrates events (time order per pixel is assumed; the stream is time-ordered).
     pub fn integrate(&mut self, events: &[CdEvent]) {
-        let alpha = self.config.cutoff_hz * 1e-6;
-        let c = self.config.contrast;
-        let w = self.width as usize;
         for e in events {
-            if u32::from(e.x) >= self.width || u32::from(e.y) >= self.height {
+            if self.pixel_of(e).is_none() {
                 self.out_of_bounds += 1;
                 continue;
             }
-            let (base, offset) = self.base_and_offset(e.t_us);
-            let i = e.y as usize * w + e.x as usize;
-            if self.intensity {
-                let dt = (e.t_us - (base + i64::from(self.last_us[i]))).max(0) as f32;
-                let decay = decay(alpha * dt);
-                let step = if e.polarity { c } else { -c };
-                self.log_intensity[i] = self.log_intensity[i] * decay + step;
-            }
-            self.last_us[i] = offset;
+            self.apply(e);
         }
         self.events += events.len() as u64;
+    }
+
+    /// Row-major index of the event's pixel; `None` outside the sensor.
+    #[inline]
+    fn pixel_of(&self, e: &CdEvent) -> Option<usize> {
+        (u32::from(e.x) < self.width && u32::from(e.y) < self.height)
+            .then(|| e.y as usize * self.width as usize + e.x as usize)
+    }
+
+    /// Applies one event inside the sensor to its pixel (decay, step, time).
+    #[inline]
+    fn apply(&mut self, e: &CdEvent) {
+        let i = e.y as usize * self.width as usize + e.x as usize;
+        let (base, offset) = self.base_and_offset(e.t_us);
+        if self.intensity {
+            let alpha = self.config.cutoff_hz * 1e-6;
+            let c = self.config.contrast;
+            let dt = (e.t_us - (base + i64::from(self.last_us[i]))).max(0) as f32;
+            let decay = decay(alpha * dt);
+            let step = if e.polarity { c } else { -c };
+            self.log_intensity[i] = self.log_intensity[i] * decay + step;
+        }
+        self.last_us[i] = offset;
     }
 
     /// The base in use for an event at `t_us` (moved forward first if the offset would leave the storable range),
