@@ -40,19 +40,22 @@ fn moving_marker() -> (tempfile::TempDir, Recording) {
 /// The ground truth of `name` in `recording`, the first tick's time and a tracker with the default config started
 /// there at the true pose.
 fn tracker_from_truth(recording: &Recording, name: &str) -> (PoseTrack, i64, EventTrack6d) {
+    tracker_from_truth_with(recording, name, TrackerConfig::default())
+}
+
+fn tracker_from_truth_with(
+    recording: &Recording,
+    name: &str,
+    config: TrackerConfig,
+) -> (PoseTrack, i64, EventTrack6d) {
     let gt = recording.ground_truth.clone().expect("ground truth");
     let truth = PoseTrack::from_samples(&gt, name);
     let first = recording_ticks(recording).expect("ticks")[0].t_us;
     let pose = truth.interpolated_at(first).expect("first pose");
     let object = recording_object(recording, name, first, pose).expect("model");
     let rig = recording_rig(recording).expect("rig");
-    let tracker = EventTrack6d::new(
-        TrackerConfig::default(),
-        rig,
-        vec![object],
-        Box::new(CpuRenderer::new()),
-    )
-    .expect("tracker");
+    let tracker = EventTrack6d::new(config, rig, vec![object], Box::new(CpuRenderer::new()))
+        .expect("tracker");
     (truth, first, tracker)
 }
 
@@ -270,15 +273,19 @@ impl PoseTracker for KnockedOff {
     }
 }
 
-/// Depth frames 40 ms late on a moderate mug shake: each is checked at its exposure, against the estimate the pose
-/// history holds for then, by the same rule. An estimate knocked 5 cm off at a depth exposure is found out by that
+/// Depth frames 40 ms late on a moderate mug shake, carried from their exposure (`retrack_late_depth = false`):
+/// each is checked at its exposure, against the estimate the pose history holds for then, by the same rule. An estimate knocked 5 cm off at a depth exposure is found out by that
 /// frame when it arrives, and replaced there by a candidate from the frame before. (At the tick the frame arrives
 /// at, its points are carried by the motion estimated since, so they would agree with a wrong estimate.)
 #[test]
 fn late_frames_are_checked_at_their_exposure() {
     let dir = tempfile::tempdir().unwrap();
     let recording = mug_recording(&dir.path().join("mug"), 1.0);
-    let (truth, first, inner) = tracker_from_truth(&recording, "mug");
+    let carrying = TrackerConfig {
+        retrack_late_depth: false,
+        ..TrackerConfig::default()
+    };
+    let (truth, first, inner) = tracker_from_truth_with(&recording, "mug", carrying);
     let rule = TrackerConfig::default().fallback_rule();
     // Knocked off at the 11th depth exposure.
     let knock = recording_ticks(&recording)
@@ -372,4 +379,61 @@ fn late_frames_are_checked_at_their_exposure() {
         (last.pose.translation.vector - end.translation.vector).norm() < 0.02,
         "not back on the object by the end: {last:?}"
     );
+}
+
+/// Depth frames 20 ms late, tracked again from their exposure (the default): each frame's check is made at its
+/// exposure tick as on time, and reported with the tick that tracked again, the one the frame arrived at.
+#[test]
+fn frames_tracked_again_report_their_check_at_the_arrival_tick() {
+    let dir = tempfile::tempdir().unwrap();
+    let recording = mug_recording(&dir.path().join("mug"), 1.0);
+    let (_, first, mut tracker) = tracker_from_truth(&recording, "mug");
+    let rule = TrackerConfig::default().fallback_rule();
+    let latency_us = 20_000;
+    let timing = OfflineTiming {
+        start_us: first,
+        depth_latency_us: latency_us,
+    };
+    let mut checks = Vec::new();
+    let mut exposures = Vec::new();
+    track_recording_timed(
+        &recording,
+        &mut tracker,
+        timing,
+        |tick, _, t| {
+            checks.clear();
+            t.depth_fallback_checks(&mut checks);
+            assert!(
+                checks.len() <= 1,
+                "tick {}: {} checks",
+                tick.index,
+                checks.len()
+            );
+            for c in &checks {
+                assert_eq!(c.tick_us, tick.t_us);
+                let age = tick.t_us - c.t_us;
+                assert!(
+                    (latency_us..latency_us + 8_400).contains(&age),
+                    "tick {}: a check {age} us old",
+                    tick.index
+                );
+                exposures.push(c.t_us);
+                check_decision(c, &rule, None);
+            }
+        },
+        |_| {},
+    )
+    .expect("tracking");
+    let counters = tracker.counters();
+    assert_eq!(
+        counters.late_frames_retracked, counters.depth_frames,
+        "{counters:?}"
+    );
+    // Every frame but the first (no frame before it to start a candidate from) is checked once.
+    assert_eq!(
+        exposures.len() as u64 + 1,
+        counters.depth_frames,
+        "{counters:?}"
+    );
+    assert!(exposures.windows(2).all(|w| w[1] > w[0]), "{exposures:?}");
 }

@@ -116,6 +116,68 @@ fn late_frames_keep_the_object_tracked_where_dropping_them_loses_it() {
     );
 }
 
+/// With frames 20 ms late, each arrives three ticks after its exposure: the tracker goes back to its state at the
+/// exposure tick, tracks those ticks again with the frame in place, and so reaches the arrival tick with the very
+/// estimate an on-time frame gives there. Carrying the frame from its exposure instead (the cheaper way) does not.
+#[test]
+fn tracking_again_from_the_exposure_reaches_the_on_time_estimate_at_each_arrival() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = recording(dir.path());
+    let (on_time, _, _) = track(&rec, TrackerConfig::default(), 0);
+    let (late, tracker, stats) = track(&rec, TrackerConfig::default(), 20_000);
+    let carrying = TrackerConfig {
+        retrack_late_depth: false,
+        ..TrackerConfig::default()
+    };
+    let (carried, carrying_tracker, _) = track(&rec, carrying, 20_000);
+    let identical = |estimates: &[PoseEstimate]| {
+        estimates
+            .iter()
+            .zip(&on_time)
+            .filter(|(e, o)| {
+                assert_eq!(e.t_us, o.t_us);
+                e.pose == o.pose
+            })
+            .count() as u64
+    };
+
+    let c = tracker.counters();
+    assert!(stats.depth_frames >= 25, "{stats:?}");
+    assert_eq!(c.depth_frames_late, stats.depth_frames, "{c:?}");
+    assert_eq!(c.late_frames_retracked, stats.depth_frames, "{c:?}");
+    assert_eq!(c.late_frames_not_retracked, 0, "{c:?}");
+    // Exposure tick and the two after it, again for every frame; each tick counted once.
+    assert_eq!(c.ticks_retracked, 3 * stats.depth_frames, "{c:?}");
+    assert_eq!(c.ticks, late.len() as u64, "{c:?}");
+    // Every arrival tick is bit for bit the on-time estimate (the ticks between lack the frame still in transit).
+    assert_eq!(identical(&late), stats.depth_frames);
+    let k = carrying_tracker.counters();
+    assert_eq!(
+        (k.late_frames_retracked, k.ticks_retracked),
+        (0, 0),
+        "{k:?}"
+    );
+    assert!(
+        identical(&carried) < 5,
+        "{} carried estimates are on time's",
+        identical(&carried)
+    );
+
+    let from = on_time[0].t_us + 200_000;
+    let (e_on_time, e_late, e_carried) = (
+        mean_error(&rec, &timed(&on_time), from),
+        mean_error(&rec, &timed(&late), from),
+        mean_error(&rec, &timed(&carried), from),
+    );
+    eprintln!(
+        "mean position error after 0.2 s: on time {:.1} mm, 20 ms late {:.1} mm tracked again, {:.1} mm carried",
+        e_on_time * 1e3,
+        e_late * 1e3,
+        e_carried * 1e3
+    );
+    assert!(e_late < e_carried, "{e_late} against {e_carried} m");
+}
+
 /// What a late frame corrects at its tick, it corrects since its exposure: the history `pose_at` answers from is
 /// nearer the truth than the estimates reported at those ticks. Without latency it is the reported estimates.
 #[test]

@@ -94,6 +94,54 @@ fn allocations_of_steady_ticks(
     (ALLOCATIONS.load(Ordering::SeqCst), s.tracker.counters())
 }
 
+/// Counts the heap allocations of 24 steady ticks at 120 Hz (a depth exposure every fourth) whose frames arrive 20
+/// ms late, so that each is tracked again from its exposure, after 48 such ticks of warm-up.
+fn allocations_of_retracking_ticks(rec: &Recording) -> (usize, TrackerCounters) {
+    let mut s = steady_tracker_of(
+        rec.clone(),
+        TrackerConfig::default(),
+        Box::new(CpuRenderer::new()),
+        1,
+    );
+    let first = s.last_tick;
+    let tick_at = |k: u64| drivers::timeline::Tick {
+        index: first.index + k,
+        t_us: first.t_us + k as i64 * 8_333,
+        depth_frame: k.is_multiple_of(4).then_some(k / 4),
+        synthesized: false,
+    };
+    let mut out = Vec::with_capacity(4);
+    let mut events: Vec<drivers::event::CdEvent> = Vec::with_capacity(2000);
+    let mut step = |s: &mut eventtrack6d_tests::tick_fixture::SteadyTracker, k: u64| {
+        let tick = tick_at(k);
+        events.clear();
+        events.extend((0..2000u16).map(|i| drivers::event::CdEvent {
+            t_us: tick.t_us - 8_000 + i64::from(i) * 4,
+            x: 500 + i % 200,
+            y: 300 + i / 200,
+            polarity: i % 3 == 0,
+        }));
+        s.tracker.push_events(&events);
+        if k >= 3 && k % 4 == 3 {
+            // The frame exposed three ticks ago (25 ms) arrives now.
+            s.tracker.push_depth(tick_at(k - 3).t_us, &mut s.depth);
+        }
+        out.clear();
+        s.tracker.tick(&tick, &mut out);
+        s.tracker.prepare_next_tick();
+    };
+    for k in 1..=48 {
+        step(&mut s, k);
+    }
+    ALLOCATIONS.store(0, Ordering::SeqCst);
+    COUNTING.store(true, Ordering::SeqCst);
+    for k in 49..=72 {
+        step(&mut s, k);
+    }
+    COUNTING.store(false, Ordering::SeqCst);
+    (ALLOCATIONS.load(Ordering::SeqCst), s.tracker.counters())
+}
+
 #[test]
 fn steady_state_ticks_do_not_allocate() {
     let dir = tempfile::tempdir().unwrap();
@@ -116,11 +164,25 @@ fn steady_state_ticks_do_not_allocate() {
         n, 0,
         "two objects on two threads: {n} heap allocations in 11 steady-state ticks"
     );
-    // Depth frames 20 ms late: registered at the pose history's estimate, aligned there and carried.
-    let (n, counters) = allocations_of_steady_ticks(&rec, TrackerConfig::default(), 1, 20_000);
+    // Depth frames 20 ms late, carried from their exposure (not tracked again): registered at the pose history's
+    // estimate, aligned there and carried.
+    let carrying = TrackerConfig {
+        retrack_late_depth: false,
+        ..TrackerConfig::default()
+    };
+    let (n, counters) = allocations_of_steady_ticks(&rec, carrying, 1, 20_000);
     assert!(counters.depth_frames_late >= 13, "{counters:?}");
     assert_eq!(
         n, 0,
         "late depth frames: {n} heap allocations in 11 steady-state ticks"
+    );
+    // Late frames tracked again from their exposure: states saved, events logged and wound back and forth.
+    let (n, counters) = allocations_of_retracking_ticks(&rec);
+    assert!(counters.late_frames_retracked >= 17, "{counters:?}");
+    // The first frame's exposure tick was the fixture's, before any state was saved.
+    assert_eq!(counters.late_frames_not_retracked, 1, "{counters:?}");
+    assert_eq!(
+        n, 0,
+        "late depth frames tracked again: {n} heap allocations in 24 steady-state ticks"
     );
 }

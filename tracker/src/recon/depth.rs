@@ -47,7 +47,7 @@ impl DepthImage {
 
 /// One object's `D_0`: depth points around it at the last exposure, split into points that move with the object
 /// (stored in the object frame at the exposure) and points that stay (stored in the event camera frame).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Default)]
 pub struct CarriedDepth {
     exposure_us: Option<i64>,
     static_points: Vec<Point3<f32>>,
@@ -56,6 +56,23 @@ pub struct CarriedDepth {
     stride: u32,
     /// Horizontal focal length of the depth camera, pixels.
     depth_fx: f64,
+}
+
+impl Clone for CarriedDepth {
+    fn clone(&self) -> Self {
+        let mut c = Self::default();
+        c.clone_from(self);
+        c
+    }
+
+    /// Reuses this reconstruction's point buffers (no allocation once they are large enough).
+    fn clone_from(&mut self, source: &Self) {
+        self.exposure_us = source.exposure_us;
+        self.static_points.clone_from(&source.static_points);
+        self.object_points.clone_from(&source.object_points);
+        self.stride = source.stride;
+        self.depth_fx = source.depth_fx;
+    }
 }
 
 /// Most depth points kept around one object per exposure (the depth image is subsampled above this).

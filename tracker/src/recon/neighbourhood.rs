@@ -18,12 +18,27 @@ pub const MIN_MOTION_POINTS: usize = 50;
 
 /// The previous depth frame's points around one object that the new frame no longer measures where they were,
 /// in the object frame at the previous frame's estimate (the anchor).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Default)]
 pub struct MovingNeighbourhood {
     /// Object frame at the anchor, metres.
     points: Vec<Point3<f32>>,
     /// `T_cam_obj` of the object at the previous frame.
     anchor: Isometry3<f64>,
+}
+
+impl Clone for MovingNeighbourhood {
+    fn clone(&self) -> Self {
+        Self {
+            points: self.points.clone(),
+            anchor: self.anchor,
+        }
+    }
+
+    /// Reuses this neighbourhood's point buffer (no allocation once it is large enough).
+    fn clone_from(&mut self, source: &Self) {
+        self.points.clone_from(&source.points);
+        self.anchor = source.anchor;
+    }
 }
 
 impl MovingNeighbourhood {

@@ -128,8 +128,13 @@ impl std::fmt::Display for Summary {
         {
             writeln!(
                 f,
-                "late depth:      {} frames used after their own tick ({} times an object's pose history did not reach back), {} still in transit at the end",
-                c.depth_frames_late, c.late_depth_unplaced, self.source_stats.depth_in_transit
+                "late depth:      {} frames used after their own tick ({} tracked again from their exposure over {} ticks, {} carried from it; {} times an object's pose history did not reach back), {} still in transit at the end",
+                c.depth_frames_late,
+                c.late_frames_retracked,
+                c.ticks_retracked,
+                c.late_frames_not_retracked,
+                c.late_depth_unplaced,
+                self.source_stats.depth_in_transit
             )?;
         }
         if !self.source_stats.anomalies.is_empty() {

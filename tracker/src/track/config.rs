@@ -199,6 +199,14 @@ pub struct TrackerConfig {
     /// refines against it at the current tick. Older frames are dropped and counted (`depth_frames_unused`);
     /// 0 uses only frames that arrive by their own tick. At most [`MAX_DEPTH_AGE_LIMIT_MS`].
     pub max_depth_age_ms: f64,
+    /// When a depth frame arrives after its exposure's tick, go back to the tracker's state at that tick (saved
+    /// then) and track the ticks since again with the frame in place, as if it had come in time; the poses
+    /// already out stand. `false` instead carries the frame from its exposure to the current tick (cheaper: no
+    /// ticks tracked again, no states or events kept, but the motion since the exposure stays the events' alone).
+    pub retrack_late_depth: bool,
+    /// Most events kept for tracking again (24 bytes each): the events since the oldest exposure whose frame has
+    /// not come. A late frame whose events no longer fit is carried instead (counted).
+    pub retrack_max_events: usize,
 }
 
 /// Largest [`TrackerConfig::max_depth_age_ms`]: the span the per-object pose history covers at 120 Hz, less a
@@ -252,6 +260,8 @@ impl Default for TrackerConfig {
             object_threads: 0,
             prefetch_renders: true,
             max_depth_age_ms: 200.0,
+            retrack_late_depth: true,
+            retrack_max_events: 4_000_000,
         }
     }
 }

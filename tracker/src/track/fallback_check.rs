@@ -75,7 +75,8 @@ pub struct DepthFallbackCheck {
     /// Time the poses are at, microseconds on the event camera's clock: the depth frame's exposure (a tick).
     pub t_us: i64,
     /// Tick the check was made at, microseconds: `t_us` for a frame on time, later for a frame that arrived after
-    /// its own tick (checked at its exposure, where it shows the object).
+    /// its own tick (checked at its exposure, where it shows the object, or tracked again from there: the tick that
+    /// tracked again).
     pub tick_us: i64,
     /// The event-driven estimate before the check, `T_cam_obj`, metres.
     pub estimate: Isometry3<f64>,

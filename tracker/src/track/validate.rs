@@ -74,6 +74,12 @@ impl TrackerConfig {
             "must be 0 to 500 ms",
         )?;
         check(
+            "retrack_max_events",
+            self.retrack_max_events as f64,
+            |v| v <= 100_000_000.0,
+            "must be at most 100000000 (2.4 GB)",
+        )?;
+        check(
             "prediction_gain",
             self.prediction_gain,
             |v| (0.0..=2.0).contains(&v),
@@ -405,6 +411,11 @@ mod tests {
         let e = parse("[quality]\nlost_mean_ticks = 20000").unwrap_err();
         assert_eq!(e.key, "quality.lost_mean_ticks");
         // The pose history covers 500 ms; a depth frame older than that could not be placed.
+        assert_eq!(parse("retrack_max_events = 0"), Ok(()));
+        assert_eq!(
+            parse("retrack_max_events = 100000001").unwrap_err().key,
+            "retrack_max_events"
+        );
         assert_eq!(parse("max_depth_age_ms = 0.0"), Ok(()));
         assert_eq!(parse("max_depth_age_ms = 500.0"), Ok(()));
         for bad in ["max_depth_age_ms = 501.0", "max_depth_age_ms = -1.0"] {

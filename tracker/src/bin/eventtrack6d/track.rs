@@ -256,6 +256,12 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             "{} depth frames used after their own tick (delivered --depth-latency-ms late); {} times an object's pose history did not reach back to the exposure",
             counters.depth_frames_late, counters.late_depth_unplaced
         );
+        eprintln!(
+            "{} of them tracked again from their exposure ({} ticks again), {} carried from it instead (no state saved there, or their events no longer in the log)",
+            counters.late_frames_retracked,
+            counters.ticks_retracked,
+            counters.late_frames_not_retracked
+        );
     }
     if stats.depth_frames_in_transit > 0 {
         eprintln!(

@@ -13,6 +13,14 @@ pub struct TrackerCounters {
     /// Of the depth frames used, those used after their own exposure's tick (they arrived late; see
     /// `max_depth_age_ms`).
     pub depth_frames_late: u64,
+    /// Of the late depth frames used, those the tracker tracked again from their exposure with
+    /// ([`super::super::TrackerConfig::retrack_late_depth`]).
+    pub late_frames_retracked: u64,
+    /// Ticks tracked again for them (their poses were out already).
+    pub ticks_retracked: u64,
+    /// Late depth frames used without tracking again: no state was saved at their exposure, or the events since
+    /// no longer fitted the log (`retrack_max_events`). Such a frame is carried from its exposure instead.
+    pub late_frames_not_retracked: u64,
     /// Late depth frames an object could not use, summed over objects: its pose history did not reach back to
     /// the exposure (it was re-detected or reset since).
     pub late_depth_unplaced: u64,

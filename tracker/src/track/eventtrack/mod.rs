@@ -5,6 +5,7 @@ mod counters;
 mod lost_search;
 mod next_tick;
 mod place_check;
+mod retrack;
 mod setup;
 mod step;
 mod threads;
@@ -18,6 +19,7 @@ use super::{DepthFallbackCheck, PoseEstimate, PoseTracker, TrackingState};
 use lost_search::Redetection;
 use next_tick::NextTick;
 use place_check::ProbeSet;
+use retrack::Retrack;
 use step::ObjectStep;
 use threads::ObjectThreads;
 
@@ -49,6 +51,9 @@ pub struct EventTrack6d {
     next_tick: NextTick,
     counters: TrackerCounters,
     redetection: Redetection,
+    /// States at recent depth-exposure ticks and the events since, to track again from a late frame's exposure
+    /// ([`TrackerConfig::retrack_late_depth`]); `None` when off.
+    retrack: Option<Box<Retrack>>,
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -160,6 +165,8 @@ impl EventTrack6d {
         } else {
             EventSurface::latest_times_only(cam.width, cam.height)
         };
+        let config_retrack = config.retrack_late_depth && config.max_depth_age_ms > 0.0;
+        let retrack_events = config.retrack_max_events;
         let mut tracker = Self {
             surface,
             depth: DepthFrame {
@@ -181,6 +188,7 @@ impl EventTrack6d {
             next_tick: NextTick::default(),
             counters: TrackerCounters::default(),
             redetection,
+            retrack: config_retrack.then(|| Box::new(Retrack::new(retrack_events))),
         };
         tracker.render_first_rois()?;
         Ok(tracker)
@@ -309,7 +317,10 @@ impl PoseTracker for EventTrack6d {
 
     fn push_events(&mut self, events: &[CdEvent]) {
         if self.config.events || self.config.depth != DepthUse::DepthFramesOnly {
-            self.surface.integrate(events);
+            match self.retrack.as_mut() {
+                Some(r) if r.is_logging() => self.surface.integrate_logged(events, &mut r.log),
+                _ => self.surface.integrate(events),
+            }
         }
     }
 
@@ -323,13 +334,89 @@ impl PoseTracker for EventTrack6d {
     }
 
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
+        self.retrack_before(tick);
+        self.step_tick(tick, out, true);
+    }
+
+    fn prepare_next_tick(&mut self) {
+        self.catch_up_background();
+        if self.config.prefetch_renders && self.refines(false) {
+            // What the last tick did not take, the next one will not either.
+            self.renderer.forget_prefetched();
+            for w in &mut self.workers {
+                w.forget_prefetched();
+            }
+            let (times, count) = self.next_tick.candidates();
+            for &t in &times[..count] {
+                self.prefetch_next(t);
+            }
+        }
+    }
+
+    fn event_surface(&self) -> Option<&EventSurface> {
+        Some(&self.surface)
+    }
+
+    fn tracker_counters(&self) -> Option<TrackerCounters> {
+        Some(self.counters())
+    }
+
+    fn depth_fallback_checks(&self, out: &mut Vec<DepthFallbackCheck>) {
+        // A check is the latest tick's only if the object refined at that tick (or tracked again before it).
+        let latest = self.last_tick_us;
+        if let Some(r) = &self.retrack {
+            out.extend_from_slice(&r.checks);
+        }
+        out.extend(
+            self.objects
+                .iter()
+                .filter_map(|o| o.fallback_check)
+                .filter(|c| Some(c.tick_us) == latest),
+        );
+    }
+
+    fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
+        let o = self.objects.get(object)?;
+        self.last_tick_us?;
+        let pose = match o.previous {
+            // Within the recent estimates: interpolated between the two ticks either side.
+            _ if let Some(p) = o.history().at(t_us) => p,
+            Some((t0, p0)) if o.t_us > t0 => {
+                let s = (t_us - t0) as f64 / (o.t_us - t0) as f64;
+                // Interpolate, or extrapolate at most one tick period past the latest estimate.
+                let limit = 1.0 + 8_333.0 / (o.t_us - t0) as f64;
+                se3::interpolate(&p0, &o.pose, s.clamp(0.0, limit))
+            }
+            _ => o.pose,
+        };
+        let state = match o.reported.get() {
+            TrackingState::Tracking if t_us > o.t_us + 8_333 => TrackingState::Degraded,
+            reported => reported,
+        };
+        Some(PoseEstimate {
+            object,
+            t_us,
+            pose,
+            quality: o.quality,
+            state,
+        })
+    }
+}
+
+impl EventTrack6d {
+    /// One tick of every object: predict, re-detect, render, refine, and the estimates into `out`. `live` is
+    /// false for a tick tracked again from a late frame's exposure (its time is not the clock's).
+    fn step_tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>, live: bool) {
         let t_us = tick.t_us;
+
         let dt_s = self
             .last_tick_us
             .map(|t| (t_us - t) as f64 * 1e-6)
             .unwrap_or(1.0 / 120.0)
             .max(0.0);
-        self.next_tick.record(t_us);
+        if live {
+            self.next_tick.record(t_us);
+        }
         self.last_tick_us = Some(t_us);
         self.counters.ticks += 1;
         // A depth frame belongs to this tick if it was exposed within half a tick period of it; one exposed
@@ -404,66 +491,5 @@ impl PoseTracker for EventTrack6d {
             quality: o.quality,
             state: o.reported.get(),
         }));
-    }
-
-    fn prepare_next_tick(&mut self) {
-        self.catch_up_background();
-        if self.config.prefetch_renders && self.refines(false) {
-            // What the last tick did not take, the next one will not either.
-            self.renderer.forget_prefetched();
-            for w in &mut self.workers {
-                w.forget_prefetched();
-            }
-            let (times, count) = self.next_tick.candidates();
-            for &t in &times[..count] {
-                self.prefetch_next(t);
-            }
-        }
-    }
-
-    fn event_surface(&self) -> Option<&EventSurface> {
-        Some(&self.surface)
-    }
-
-    fn tracker_counters(&self) -> Option<TrackerCounters> {
-        Some(self.counters())
-    }
-
-    fn depth_fallback_checks(&self, out: &mut Vec<DepthFallbackCheck>) {
-        // A check is the latest tick's only if the object refined at that tick.
-        let latest = self.last_tick_us;
-        out.extend(
-            self.objects
-                .iter()
-                .filter_map(|o| o.fallback_check)
-                .filter(|c| Some(c.tick_us) == latest),
-        );
-    }
-
-    fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
-        let o = self.objects.get(object)?;
-        self.last_tick_us?;
-        let pose = match o.previous {
-            // Within the recent estimates: interpolated between the two ticks either side.
-            _ if let Some(p) = o.history().at(t_us) => p,
-            Some((t0, p0)) if o.t_us > t0 => {
-                let s = (t_us - t0) as f64 / (o.t_us - t0) as f64;
-                // Interpolate, or extrapolate at most one tick period past the latest estimate.
-                let limit = 1.0 + 8_333.0 / (o.t_us - t0) as f64;
-                se3::interpolate(&p0, &o.pose, s.clamp(0.0, limit))
-            }
-            _ => o.pose,
-        };
-        let state = match o.reported.get() {
-            TrackingState::Tracking if t_us > o.t_us + 8_333 => TrackingState::Degraded,
-            reported => reported,
-        };
-        Some(PoseEstimate {
-            object,
-            t_us,
-            pose,
-            quality: o.quality,
-            state,
-        })
     }
 }

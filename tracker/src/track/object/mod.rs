@@ -8,6 +8,7 @@ mod outcome;
 mod placement;
 mod quality_window;
 mod refine;
+mod snapshot;
 
 use super::config::TrackerConfig;
 use super::estimate::{ReportedState, TrackingState};
@@ -21,6 +22,7 @@ use drivers::recording::DepthFrame;
 pub use history::PoseHistory;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3, Vector6};
 use quality_window::QualityWindow;
+pub(crate) use snapshot::ObjectSnapshot;
 
 /// A tracked object: its model, its state and the buffers its refinement reuses every tick.
 #[derive(Debug)]

@@ -1,12 +1,31 @@
 //! The recent quality of one object: a fixed window of per-tick quality scores and their mean.
 
 /// The last `capacity` quality scores (each in [0, 1]) of one object. Allocates once, at construction.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub(crate) struct QualityWindow {
     scores: Vec<f32>,
     capacity: usize,
     next: usize,
     sum: f64,
+}
+
+impl Clone for QualityWindow {
+    fn clone(&self) -> Self {
+        Self {
+            scores: self.scores.clone(),
+            capacity: self.capacity,
+            next: self.next,
+            sum: self.sum,
+        }
+    }
+
+    /// Reuses this window's buffer (no allocation once it holds `capacity` scores).
+    fn clone_from(&mut self, source: &Self) {
+        self.scores.clone_from(&source.scores);
+        self.capacity = source.capacity;
+        self.next = source.next;
+        self.sum = source.sum;
+    }
 }
 
 impl QualityWindow {

@@ -1,0 +1,233 @@
+//! Tracking again from a late depth frame's exposure. A live depth camera delivers a frame tens of milliseconds
+//! after its exposure, so the ticks in between were tracked on events alone. When the frame arrives, the tracker
+//! goes back to its state at the exposure tick (saved then), the event surface back to its events then, and
+//! tracks those ticks again with the frame in place, as if it had come in time; then it tracks the current tick.
+//! The poses already published for those ticks stand; from the current tick on, the estimates are the ones an
+//! on-time frame would have given.
+
+use super::EventTrack6d;
+use crate::recon::SurfaceLog;
+use crate::render::SceneObject;
+use crate::track::object::ObjectSnapshot;
+use crate::track::{DepthFallbackCheck, PoseEstimate};
+use drivers::timeline::Tick;
+use std::collections::VecDeque;
+
+/// Half a tick period, microseconds: a depth frame belongs to the tick whose time is this close to its exposure.
+const SAME_TICK_US: i64 = 4_200;
+
+/// The tracker's state at one depth-exposure tick, before that tick ran.
+#[derive(Debug)]
+struct ExposureState {
+    tick: Tick,
+    objects: Vec<ObjectSnapshot>,
+    scene: Vec<SceneObject>,
+    last_tick_us: Option<i64>,
+    /// Position of the event log then (the events pushed before the tick).
+    events_before: u64,
+}
+
+/// What tracking again from a late frame's exposure needs: the states at recent depth-exposure ticks, the ticks
+/// since the oldest, and the events since (with what each pixel held before them).
+#[derive(Debug)]
+pub(super) struct Retrack {
+    /// States at depth-exposure ticks whose frame has not come yet, oldest first.
+    states: VecDeque<ExposureState>,
+    /// Slots of states no longer needed, reused for the next ones.
+    spare: Vec<ExposureState>,
+    /// The ticks since the oldest state, oldest first, each with the event log's position then.
+    ticks: VecDeque<(Tick, u64)>,
+    /// The events since the oldest state.
+    pub(super) log: SurfaceLog,
+    /// The poses of the ticks tracked again (not published: those ticks' poses are out already).
+    replayed: Vec<PoseEstimate>,
+    /// The depth safety net's checks made while tracking again before the latest tick, reported as that tick's.
+    pub(super) checks: Vec<DepthFallbackCheck>,
+}
+
+impl Retrack {
+    /// Keeps at most `max_events` events (each 24 bytes).
+    pub(super) fn new(max_events: usize) -> Self {
+        Self {
+            states: VecDeque::new(),
+            spare: Vec::new(),
+            ticks: VecDeque::new(),
+            log: SurfaceLog::new(max_events),
+            replayed: Vec::new(),
+            checks: Vec::new(),
+        }
+    }
+
+    /// Whether any state is kept (events must then be logged).
+    pub(super) fn is_logging(&self) -> bool {
+        !self.states.is_empty()
+    }
+
+    /// Forgets the states older than `max_age_us` before `t_us`, and the ticks and events before the oldest
+    /// state left.
+    fn forget_before(&mut self, t_us: i64, max_age_us: i64) {
+        while let Some(s) = self.states.front() {
+            if t_us - s.tick.t_us <= max_age_us {
+                break;
+            }
+            if let Some(s) = self.states.pop_front() {
+                self.spare.push(s);
+            }
+        }
+        let (oldest, position) = self
+            .states
+            .front()
+            .map_or((t_us, self.log.end()), |s| (s.tick.t_us, s.events_before));
+        while self.ticks.front().is_some_and(|(k, _)| k.t_us < oldest) {
+            self.ticks.pop_front();
+        }
+        self.log.forget_before(position);
+    }
+
+    /// Forgets the states and ticks at or after `t_us`.
+    fn forget_from(&mut self, t_us: i64) {
+        while self.states.back().is_some_and(|s| s.tick.t_us >= t_us) {
+            if let Some(s) = self.states.pop_back() {
+                self.spare.push(s);
+            }
+        }
+        while self.ticks.back().is_some_and(|(k, _)| k.t_us >= t_us) {
+            self.ticks.pop_back();
+        }
+    }
+
+    /// Drops the states of ticks at or before `t_us` (their frames were used).
+    fn drop_states_until(&mut self, t_us: i64) {
+        while self.states.front().is_some_and(|s| s.tick.t_us <= t_us) {
+            if let Some(s) = self.states.pop_front() {
+                self.spare.push(s);
+            }
+        }
+    }
+}
+
+impl EventTrack6d {
+    /// Before `tick` runs: if the depth frame waiting was exposed at an earlier tick whose state was saved, tracks
+    /// the ticks from that one to this one again with the frame in place (the frame is used up); then saves the
+    /// state if `tick` is a depth-exposure tick whose frame has not come.
+    pub(super) fn retrack_before(&mut self, tick: &Tick) {
+        let Some(mut retrack) = self.retrack.take() else {
+            return;
+        };
+        let max_age_us = (self.config.max_depth_age_ms * 1e3) as i64;
+        retrack.checks.clear();
+        if let Some(exposed_us) = self.depth_t_us
+            && exposed_us < tick.t_us - SAME_TICK_US
+            && tick.t_us - exposed_us <= max_age_us
+        {
+            self.track_again_from(&mut retrack, exposed_us, tick.t_us);
+        }
+        let frame_here = self
+            .depth_t_us
+            .is_some_and(|td| (td - tick.t_us).abs() <= SAME_TICK_US);
+        // A clock that stood still or went back (a restarted replay) invalidates what was kept since.
+        retrack.forget_from(tick.t_us);
+        if tick.depth_frame.is_some() && !frame_here && max_age_us > 0 {
+            let mut state = retrack.spare.pop().unwrap_or_else(|| ExposureState {
+                tick: *tick,
+                objects: self.objects.iter().map(ObjectSnapshot::of).collect(),
+                scene: Vec::with_capacity(self.scene.len()),
+                last_tick_us: None,
+                events_before: 0,
+            });
+            if retrack.states.is_empty() {
+                // Events came unlogged until now: no earlier position is reachable.
+                retrack.log.forget_before(retrack.log.end());
+            }
+            self.save_state(tick, &mut state);
+            state.events_before = retrack.log.end();
+            retrack.states.push_back(state);
+        }
+        if retrack.is_logging() {
+            retrack.ticks.push_back((*tick, retrack.log.end()));
+        }
+        retrack.forget_before(tick.t_us, max_age_us);
+        self.retrack = Some(retrack);
+    }
+
+    /// Saves the tracker's state before `tick` into `state`, reusing its buffers.
+    fn save_state(&self, tick: &Tick, state: &mut ExposureState) {
+        state.tick = *tick;
+        for (o, s) in self.objects.iter().zip(&mut state.objects) {
+            o.save(s);
+        }
+        state.scene.clone_from(&self.scene);
+        state.last_tick_us = self.last_tick_us;
+    }
+
+    /// Tracks the ticks from the saved one at `exposed_us` to just before `now_us` again, with the waiting depth
+    /// frame used at the first of them. Without a saved state there, or events back to it, the frame is left to
+    /// the tick (which carries it from its exposure).
+    fn track_again_from(&mut self, retrack: &mut Retrack, exposed_us: i64, now_us: i64) {
+        let Some(k) = retrack
+            .states
+            .iter()
+            .position(|s| (s.tick.t_us - exposed_us).abs() <= SAME_TICK_US)
+        else {
+            self.counters.late_frames_not_retracked += 1;
+            return;
+        };
+        let start_us = retrack.states[k].tick.t_us;
+        if !self
+            .surface
+            .wind_back(&mut retrack.log, retrack.states[k].events_before)
+        {
+            self.counters.late_frames_not_retracked += 1;
+            return;
+        }
+        {
+            let state = &retrack.states[k];
+            for (o, s) in self.objects.iter_mut().zip(&state.objects) {
+                o.restore(s);
+            }
+            self.scene.clone_from(&state.scene);
+            self.last_tick_us = state.last_tick_us;
+        }
+        // The frame is treated as on time at its tick; what the replayed ticks count is not counted again.
+        let counted = self.counters;
+        self.depth_t_us = Some(start_us);
+        let mut ticks = 0;
+        let mut i = retrack.ticks.partition_point(|(t, _)| t.t_us < start_us);
+        while let Some(&(tick, events_before)) = retrack.ticks.get(i) {
+            if tick.t_us >= now_us {
+                break;
+            }
+            self.surface.wind_forward(&mut retrack.log, events_before);
+            if tick.t_us > start_us
+                && let Some(state) = retrack.states.iter_mut().find(|s| s.tick.t_us == tick.t_us)
+            {
+                // A later exposure's state, saved before this frame was in place: save it again.
+                self.save_state(&tick, state);
+            }
+            retrack.replayed.clear();
+            self.step_tick(&tick, &mut retrack.replayed, false);
+            // The safety net's checks of the frame, made now: reported with the tick that made them.
+            retrack.checks.extend(
+                self.objects
+                    .iter()
+                    .filter_map(|o| o.fallback_check)
+                    .filter(|c| c.tick_us == tick.t_us)
+                    .map(|c| DepthFallbackCheck {
+                        tick_us: now_us,
+                        ..c
+                    }),
+            );
+            ticks += 1;
+            i += 1;
+        }
+        self.surface.wind_forward(&mut retrack.log, u64::MAX);
+        retrack.drop_states_until(start_us);
+        self.depth_t_us = None;
+        self.counters.ticks = counted.ticks;
+        self.counters.depth_frames = counted.depth_frames + 1;
+        self.counters.depth_frames_late = counted.depth_frames_late + 1;
+        self.counters.depth_frames_unused = counted.depth_frames_unused;
+        self.counters.late_frames_retracked += 1;
+        self.counters.ticks_retracked += ticks;
+    }
+}
