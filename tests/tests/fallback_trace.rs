@@ -273,6 +273,53 @@ impl PoseTracker for KnockedOff {
     }
 }
 
+/// Tracks `recording` with depth frames `latency_us` late and returns the safety net's checks, each checked as it
+/// is reported: at most one per tick, reported with the tick the frame arrived at and made at its exposure (at
+/// least the latency and less than the latency and a tick before), decided by the default rule.
+fn late_checks(
+    recording: &Recording,
+    tracker: &mut dyn PoseTracker,
+    first: i64,
+    latency_us: i64,
+) -> Vec<DepthFallbackCheck> {
+    let rule = TrackerConfig::default().fallback_rule();
+    let timing = OfflineTiming {
+        start_us: first,
+        depth_latency_us: latency_us,
+    };
+    let mut checks = Vec::new();
+    let mut all = Vec::new();
+    track_recording_timed(
+        recording,
+        tracker,
+        timing,
+        |tick, _, t| {
+            checks.clear();
+            t.depth_fallback_checks(&mut checks);
+            assert!(
+                checks.len() <= 1,
+                "tick {}: {} checks",
+                tick.index,
+                checks.len()
+            );
+            for c in &checks {
+                assert_eq!(c.tick_us, tick.t_us);
+                let age = tick.t_us - c.t_us;
+                assert!(
+                    (latency_us..latency_us + 8_400).contains(&age),
+                    "tick {}: a check {age} us old",
+                    tick.index
+                );
+                check_decision(c, &rule, None);
+                all.push(*c);
+            }
+        },
+        |_| {},
+    )
+    .expect("tracking");
+    all
+}
+
 /// Depth frames 40 ms late on a moderate mug shake, carried from their exposure (`retrack_late_depth = false`):
 /// each is checked at its exposure, against the estimate the pose history holds for then, by the same rule. An estimate knocked 5 cm off at a depth exposure is found out by that
 /// frame when it arrives, and replaced there by a candidate from the frame before. (At the tick the frame arrives
@@ -286,7 +333,6 @@ fn late_frames_are_checked_at_their_exposure() {
         ..TrackerConfig::default()
     };
     let (truth, first, inner) = tracker_from_truth_with(&recording, "mug", carrying);
-    let rule = TrackerConfig::default().fallback_rule();
     // Knocked off at the 11th depth exposure.
     let knock = recording_ticks(&recording)
         .expect("ticks")
@@ -300,47 +346,9 @@ fn late_frames_are_checked_at_their_exposure() {
         at_us: knock,
         last: None,
     };
-    let latency_us = 40_000;
-    let timing = OfflineTiming {
-        start_us: first,
-        depth_latency_us: latency_us,
-    };
-    let mut checks = Vec::new();
-    let mut exposures = Vec::new();
-    let mut at_knock = None;
-    track_recording_timed(
-        &recording,
-        &mut tracker,
-        timing,
-        |tick, _, t| {
-            checks.clear();
-            t.depth_fallback_checks(&mut checks);
-            assert!(
-                checks.len() <= 1,
-                "tick {}: {} checks",
-                tick.index,
-                checks.len()
-            );
-            for c in &checks {
-                // Checked at the exposure, the 120 Hz tick the frame was taken at, which lies before this tick by
-                // at least the latency and by less than the latency and a tick.
-                assert_eq!(c.tick_us, tick.t_us);
-                let age = tick.t_us - c.t_us;
-                assert!(
-                    (latency_us..latency_us + 8_400).contains(&age),
-                    "tick {}: a check {age} us old",
-                    tick.index
-                );
-                exposures.push(c.t_us);
-                check_decision(c, &rule, None);
-                if c.t_us == knock {
-                    at_knock = Some(*c);
-                }
-            }
-        },
-        |_| {},
-    )
-    .expect("tracking");
+    let checks = late_checks(&recording, &mut tracker, first, 40_000);
+    let exposures: Vec<i64> = checks.iter().map(|c| c.t_us).collect();
+    let at_knock = checks.iter().find(|c| c.t_us == knock).copied();
 
     let counters = tracker.inner.counters();
     assert_eq!(counters.depth_frames_late, counters.depth_frames);
@@ -388,42 +396,10 @@ fn frames_tracked_again_report_their_check_at_the_arrival_tick() {
     let dir = tempfile::tempdir().unwrap();
     let recording = mug_recording(&dir.path().join("mug"), 1.0);
     let (_, first, mut tracker) = tracker_from_truth(&recording, "mug");
-    let rule = TrackerConfig::default().fallback_rule();
-    let latency_us = 20_000;
-    let timing = OfflineTiming {
-        start_us: first,
-        depth_latency_us: latency_us,
-    };
-    let mut checks = Vec::new();
-    let mut exposures = Vec::new();
-    track_recording_timed(
-        &recording,
-        &mut tracker,
-        timing,
-        |tick, _, t| {
-            checks.clear();
-            t.depth_fallback_checks(&mut checks);
-            assert!(
-                checks.len() <= 1,
-                "tick {}: {} checks",
-                tick.index,
-                checks.len()
-            );
-            for c in &checks {
-                assert_eq!(c.tick_us, tick.t_us);
-                let age = tick.t_us - c.t_us;
-                assert!(
-                    (latency_us..latency_us + 8_400).contains(&age),
-                    "tick {}: a check {age} us old",
-                    tick.index
-                );
-                exposures.push(c.t_us);
-                check_decision(c, &rule, None);
-            }
-        },
-        |_| {},
-    )
-    .expect("tracking");
+    let exposures: Vec<i64> = late_checks(&recording, &mut tracker, first, 20_000)
+        .iter()
+        .map(|c| c.t_us)
+        .collect();
     let counters = tracker.counters();
     assert_eq!(
         counters.late_frames_retracked, counters.depth_frames,
