@@ -76,9 +76,9 @@ impl SurfaceLog {
 
     /// Forgets the events before `position`: the surface need not be wound back further than that.
     pub fn forget_before(&mut self, position: u64) {
-        while self.first < position.min(self.applied) && self.entries.pop_front().is_some() {
-            self.first += 1;
-        }
+        let n = position.min(self.applied).saturating_sub(self.first) as usize;
+        self.entries.drain(..n);
+        self.first += n as u64;
     }
 
     /// Forgets every event (the surface's stored times were rebased): no earlier position can be reached.
@@ -101,10 +101,6 @@ impl SurfaceLog {
         }
         self.entries.push_back(entry);
         self.applied += 1;
-    }
-
-    fn entry(&self, position: u64) -> LoggedEvent {
-        self.entries[(position - self.first) as usize]
     }
 }
 
@@ -140,27 +136,43 @@ impl EventSurface {
         if !log.reaches(position) {
             return false;
         }
-        while log.applied > position {
-            let entry = log.entry(log.applied - 1);
-            let i = entry.event.y as usize * self.width as usize + entry.event.x as usize;
-            self.last_us[i] = entry.previous_time;
-            if let Some(l) = self.log_intensity.get_mut(i) {
-                *l = entry.previous_intensity;
-            }
-            log.applied -= 1;
+        if position >= log.applied {
+            return true;
         }
+        let (from, to) = (
+            (position - log.first) as usize,
+            (log.applied - log.first) as usize,
+        );
+        let width = self.width as usize;
+        let undone = log.entries.range(from..to).rev();
+        if self.log_intensity.is_empty() {
+            for entry in undone {
+                self.last_us[entry.event.y as usize * width + entry.event.x as usize] =
+                    entry.previous_time;
+            }
+        } else {
+            for entry in undone {
+                let i = entry.event.y as usize * width + entry.event.x as usize;
+                self.last_us[i] = entry.previous_time;
+                self.log_intensity[i] = entry.previous_intensity;
+            }
+        }
+        log.applied = position;
         true
     }
 
     /// Applies the logged events not yet applied, oldest first, up to `position` (at most the log's end). The
     /// surface ends as it was when those events first came.
     pub fn wind_forward(&mut self, log: &mut SurfaceLog, position: u64) {
-        let until = position.min(log.end());
-        while log.applied < until {
-            let e = log.entry(log.applied).event;
-            self.apply(&e);
-            log.applied += 1;
+        let until = position.min(log.end()).max(log.applied);
+        let (from, to) = (
+            (log.applied - log.first) as usize,
+            (until - log.first) as usize,
+        );
+        for entry in log.entries.range(from..to) {
+            self.apply(&entry.event);
         }
+        log.applied = until;
     }
 }
 
