@@ -46,34 +46,36 @@ pub(crate) struct ObjectSnapshot {
 impl ObjectSnapshot {
     /// The state of `track` now.
     pub fn of(track: &ObjectTrack) -> Self {
-        Self {
-            pose: track.pose,
-            t_us: track.t_us,
-            previous: track.previous,
-            velocity: track.velocity,
-            predicted: track.predicted,
-            anchor: track.anchor,
-            anchor_before: track.anchor_before,
-            quality: track.quality,
-            state: track.state,
-            reported: track.reported,
-            low_ticks: track.low_ticks,
-            recent_quality: track.recent_quality.clone(),
-            fallbacks: track.fallbacks,
-            redetections: track.redetections,
-            fallback_check: track.fallback_check,
-            depth_fit: track.depth_fit,
-            visibility: track.visibility,
-            depth_frames_used: track.depth_frames_used,
-            first_us: track.first_us,
-            history: track.history.clone(),
-            late_frame: track.late_frame,
-            late_motion: track.late_motion,
-            late_depth_unplaced: track.late_depth_unplaced,
-            roi: track.roi,
-            carried: track.carried.clone(),
-            neighbourhood: track.neighbourhood.clone(),
-        }
+        let mut snapshot = Self {
+            pose: Isometry3::identity(),
+            t_us: 0,
+            previous: None,
+            velocity: Vector6::zeros(),
+            predicted: Isometry3::identity(),
+            anchor: None,
+            anchor_before: None,
+            quality: 0.0,
+            state: TrackingState::Tracking,
+            reported: ReportedState::new(TrackingState::Tracking),
+            low_ticks: 0,
+            recent_quality: QualityWindow::new(0),
+            fallbacks: 0,
+            redetections: 0,
+            fallback_check: None,
+            depth_fit: 0.0,
+            visibility: 0.0,
+            depth_frames_used: 0,
+            first_us: 0,
+            history: PoseHistory::new(),
+            late_frame: None,
+            late_motion: None,
+            late_depth_unplaced: 0,
+            roi: None,
+            carried: CarriedDepth::new(),
+            neighbourhood: MovingNeighbourhood::new(),
+        };
+        track.save(&mut snapshot);
+        snapshot
     }
 }
 
