@@ -29,16 +29,10 @@ fn track(
     config: TrackerConfig,
     latency_us: i64,
 ) -> (Vec<PoseEstimate>, EventTrack6d, OfflineStats) {
-    let gt = PoseTrack::from_samples(rec.ground_truth.as_deref().expect("ground truth"), "mug");
-    let first = recording_ticks(rec).expect("ticks")[0];
-    let pose = gt.interpolated_at(first.t_us).expect("first pose");
-    let mug = recording_object(rec, "mug", first.t_us, pose).expect("model");
-    let rig = recording_rig(rec).expect("rig");
-    let mut tracker =
-        EventTrack6d::new(config, rig, vec![mug], Box::new(CpuRenderer::new())).expect("tracker");
+    let (mut tracker, first_us) = mug_tracker(rec, config);
     let mut out = Vec::new();
     let timing = OfflineTiming {
-        start_us: first.t_us,
+        start_us: first_us,
         depth_latency_us: latency_us,
     };
     let stats = track_recording_timed(
@@ -50,6 +44,18 @@ fn track(
     )
     .expect("replay");
     (out, tracker, stats)
+}
+
+/// A tracker of the recording's mug from its first ground-truth pose, and the time of that pose.
+fn mug_tracker(rec: &Recording, config: TrackerConfig) -> (EventTrack6d, i64) {
+    let gt = PoseTrack::from_samples(rec.ground_truth.as_deref().expect("ground truth"), "mug");
+    let first = recording_ticks(rec).expect("ticks")[0];
+    let pose = gt.interpolated_at(first.t_us).expect("first pose");
+    let mug = recording_object(rec, "mug", first.t_us, pose).expect("model");
+    let rig = recording_rig(rec).expect("rig");
+    let tracker =
+        EventTrack6d::new(config, rig, vec![mug], Box::new(CpuRenderer::new())).expect("tracker");
+    (tracker, first.t_us)
 }
 
 /// Mean distance between the estimated and true positions over the estimates after `from_us`, metres.
@@ -176,6 +182,91 @@ fn tracking_again_from_the_exposure_reaches_the_on_time_estimate_at_each_arrival
         e_carried * 1e3
     );
     assert!(e_late < e_carried, "{e_late} against {e_carried} m");
+}
+
+/// Drives an [`EventTrack6d`] and records, at each depth frame handed over, the tracker's counters just before
+/// and just after.
+struct ArrivalProbe {
+    inner: EventTrack6d,
+    arrivals: Vec<(TrackerCounters, TrackerCounters)>,
+}
+
+impl PoseTracker for ArrivalProbe {
+    fn objects(&self) -> &[String] {
+        self.inner.objects()
+    }
+    fn push_events(&mut self, events: &[CdEvent]) {
+        self.inner.push_events(events);
+    }
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
+        let before = self.inner.counters();
+        self.inner.push_depth(t_us, frame);
+        self.arrivals.push((before, self.inner.counters()));
+    }
+    fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
+        self.inner.tick(tick, out);
+    }
+    fn prepare_next_tick(&mut self) {
+        self.inner.prepare_next_tick();
+    }
+    fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
+        self.inner.pose_at(object, t_us)
+    }
+}
+
+/// A live depth camera's frame comes between two ticks: the tracker tracks the ticks since its exposure again
+/// when it arrives, so that work is not in the next tick's latency. With tracking again off, the arrival
+/// changes nothing until the tick.
+#[test]
+fn a_late_frame_is_tracked_again_when_it_arrives_not_at_the_next_tick() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = mug_recording(&dir.path().join("mug"), 0.5);
+    for retrack_late_depth in [true, false] {
+        let config = TrackerConfig {
+            retrack_late_depth,
+            ..TrackerConfig::default()
+        };
+        let (inner, first_us) = mug_tracker(&rec, config);
+        let mut probe = ArrivalProbe {
+            inner,
+            arrivals: Vec::new(),
+        };
+        let timing = OfflineTiming {
+            start_us: first_us,
+            depth_latency_us: 20_000,
+        };
+        let stats =
+            track_recording_timed(&rec, &mut probe, timing, |_, _, _| {}, |_| {}).expect("replay");
+        assert!(stats.depth_frames >= 12, "{stats:?}");
+        assert_eq!(probe.arrivals.len() as u64, stats.depth_frames);
+        for (k, (before, after)) in probe.arrivals.iter().enumerate() {
+            assert_eq!(after.ticks, before.ticks, "frame {k}: no tick counted");
+            let retracked = after.late_frames_retracked - before.late_frames_retracked;
+            if retrack_late_depth {
+                // Its exposure tick and the two after it, now.
+                assert_eq!(retracked, 1, "frame {k}: {after:?}");
+                assert_eq!(
+                    after.ticks_retracked - before.ticks_retracked,
+                    3,
+                    "frame {k}"
+                );
+                assert_eq!(after.depth_frames, before.depth_frames + 1, "frame {k}");
+            } else {
+                assert_eq!(
+                    after, before,
+                    "frame {k}: carried at the tick, nothing at arrival"
+                );
+            }
+        }
+        let c = probe.inner.counters();
+        let expected = if retrack_late_depth {
+            stats.depth_frames
+        } else {
+            0
+        };
+        assert_eq!(c.late_frames_retracked, expected, "{c:?}");
+        assert_eq!(c.depth_frames, stats.depth_frames, "{c:?}");
+    }
 }
 
 /// What a late frame corrects at its tick, it corrects since its exposure: the history `pose_at` answers from is

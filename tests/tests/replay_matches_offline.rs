@@ -44,17 +44,30 @@ fn a_fast_replay_gives_the_offline_poses_exactly() {
 }
 
 /// With depth frames delivered 40 ms after their exposure (`[source] depth_latency_ms`, `track
-/// --depth-latency-ms`), both hand each frame over before the same tick.
+/// --depth-latency-ms`), both hand each frame over before the same tick: the replay between two ticks, when the
+/// stream reaches that time, the offline driver just before the tick after it. The tracker tracks again from
+/// the exposure when the frame arrives, so the two give the same poses.
 #[test]
 fn a_fast_replay_with_late_depth_gives_the_offline_poses_exactly() {
-    let counters = replay_matches_offline(40);
+    let counters = replay_matches_offline(40_000);
     assert!(counters.depth_frames_late >= 10, "{counters:?}");
     assert_eq!(counters.depth_frames_late, counters.depth_frames);
+    assert_eq!(counters.late_frames_retracked, counters.depth_frames);
 }
 
-/// Replays the two-object scene offline and through the runtime with depth frames `latency_ms` late, checks both
+/// A frame that falls due 50 us after a tick pulse rises (three tick periods and 50 us late) comes after that
+/// pulse's falling edge: the tick it makes is stamped before the frame was due and runs without it, as offline.
+#[test]
+fn a_frame_due_inside_a_tick_pulse_comes_after_the_pulse_as_offline() {
+    let counters = replay_matches_offline(25_050);
+    assert!(counters.depth_frames_late >= 10, "{counters:?}");
+    // Tracked again from the exposure: the exposure tick and the three after it.
+    assert_eq!(counters.ticks_retracked, 4 * counters.late_frames_retracked);
+}
+
+/// Replays the two-object scene offline and through the runtime with depth frames `latency_us` late, checks both
 /// gave the same estimates and counters, and returns the counters.
-fn replay_matches_offline(latency_ms: i64) -> TrackerCounters {
+fn replay_matches_offline(latency_us: i64) -> TrackerCounters {
     let dir = tempfile::tempdir().unwrap();
     let rec_dir = dir.path().join("rec");
     let rec = mug_and_can_recording(&rec_dir);
@@ -72,7 +85,7 @@ fn replay_matches_offline(latency_ms: i64) -> TrackerCounters {
     let mut offline = Vec::new();
     let timing = OfflineTiming {
         start_us: scene.objects[0].first_pose.0,
-        depth_latency_us: latency_ms * 1000,
+        depth_latency_us: latency_us,
     };
     let stats = track_recording_timed(
         &rec,
@@ -118,7 +131,7 @@ zenoh = false
 [can]
 enabled = false
 "#,
-        latency_ms,
+        latency_us as f64 * 1e-3,
         rec_dir.display(),
         out_dir.display()
     );

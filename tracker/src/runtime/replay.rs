@@ -1,7 +1,8 @@
 //! Recording replay: `events.raw` decoded chunk by chunk (`Recording::events`, the format's streaming decoder)
 //! into event batches and trigger edges, paced by the recording's clock (real time) or as fast as the tracker
 //! takes them, with each depth frame delivered when the trigger edge that completes its phase-coded pulse arrives
-//! (or, with a depth latency, before the first tick pulse that late: a live depth camera's transport)
+//! (or, with a depth latency, when the stream reaches its exposure plus that latency, as a live depth camera's
+//! transport delivers it; if a tick pulse is open then, after the pulse's falling edge)
 //! (frames are read ahead on a helper thread so PNG decoding never delays the stream).
 
 use super::config::Pace;
@@ -43,8 +44,9 @@ impl ReplaySource {
     }
 
     /// The same replay with each depth frame delivered `latency_us` microseconds (stream time) after its
-    /// exposure: before the first rising edge on the tick channel at least that late, as a live depth camera's
-    /// transport delivers it.
+    /// exposure, between the events either side of that time, as a live depth camera's transport delivers it. A
+    /// frame due while a tick pulse is open comes after the pulse's falling edge, so the tick that pulse makes
+    /// (stamped at its rising edge, before the frame was due) runs without it, as in the offline driver.
     pub fn with_depth_latency(mut self, latency_us: i64) -> Self {
         self.depth_latency_us = latency_us.max(0);
         self
@@ -134,7 +136,33 @@ impl Replayer<'_> {
         }
     }
 
+    /// Delivers the frames in transit that are due by stream time `t_us` (their exposure plus the latency).
+    fn deliver_due(&mut self, t_us: i64) {
+        let latency = self.depth_latency_us;
+        if self
+            .in_transit
+            .front()
+            .is_none_or(|(exposed_us, _)| t_us < exposed_us.saturating_add(latency))
+        {
+            return;
+        }
+        self.flush();
+        while let Some((exposed_us, _)) = self.in_transit.front()
+            && t_us >= exposed_us.saturating_add(latency)
+            && let Some((exposed_us, frame)) = self.in_transit.pop_front()
+        {
+            self.pacer.until(exposed_us.saturating_add(latency));
+            self.stats.depth_frames += 1;
+            self.out.depth(exposed_us, frame);
+        }
+    }
+
     fn cd(&mut self, e: CdEvent) {
+        // A frame due inside an open tick pulse waits for its falling edge: the tick that pulse makes was
+        // stamped before the frame was due, and the offline driver hands the frame over after it too.
+        if self.pending_rise.is_none() {
+            self.deliver_due(e.t_us);
+        }
         if let Some(first) = self.batch.first()
             && (self.batch.len() >= self.batch_events || e.t_us - first.t_us >= self.batch_us)
         {
@@ -167,38 +195,42 @@ impl Replayer<'_> {
 
     fn trigger(&mut self, edge: TriggerEdge) {
         self.flush();
+        let tick_channel = edge.channel == self.channel;
+        // A rising edge on the tick channel also ends a pulse whose falling edge was lost.
+        if (tick_channel && edge.rising) || self.pending_rise.is_none() {
+            self.deliver_due(edge.t_us);
+        }
         self.pacer.until(edge.t_us);
         self.stats.trigger_edges += 1;
-        if edge.channel == self.channel {
+        let mut closed = false;
+        if tick_channel {
             if edge.rising {
-                while let Some((exposed_us, _)) = self.in_transit.front()
-                    && edge.t_us >= exposed_us.saturating_add(self.depth_latency_us)
-                    && let Some((exposed_us, frame)) = self.in_transit.pop_front()
-                {
-                    self.stats.depth_frames += 1;
-                    self.out.depth(exposed_us, frame);
-                }
                 self.pending_rise = Some(edge.t_us);
-            } else if let Some(rise) = self.pending_rise.take()
-                && edge.t_us - rise >= self.wide_threshold_us
-            {
-                // The falling edge of a phase-coded pulse: its depth frame goes first, so the tracker has it
-                // before the tick that the timeline makes of this pulse.
-                let n = self.wide_pulses;
-                self.wide_pulses += 1;
-                match self.depth_frame(n) {
-                    Some(frame) if self.depth_latency_us > 0 => {
-                        self.in_transit.push_back((rise, Box::new(frame)));
+            } else if let Some(rise) = self.pending_rise.take() {
+                closed = true;
+                if edge.t_us - rise >= self.wide_threshold_us {
+                    // The falling edge of a phase-coded pulse: its depth frame goes first, so the tracker has
+                    // it before the tick that the timeline makes of this pulse.
+                    let n = self.wide_pulses;
+                    self.wide_pulses += 1;
+                    match self.depth_frame(n) {
+                        Some(frame) if self.depth_latency_us > 0 => {
+                            self.in_transit.push_back((rise, Box::new(frame)));
+                        }
+                        Some(frame) => {
+                            self.stats.depth_frames += 1;
+                            self.out.depth(rise, Box::new(frame));
+                        }
+                        None => self.stats.depth_missing += 1,
                     }
-                    Some(frame) => {
-                        self.stats.depth_frames += 1;
-                        self.out.depth(rise, Box::new(frame));
-                    }
-                    None => self.stats.depth_missing += 1,
                 }
             }
         }
         self.out.trigger(edge);
+        if closed {
+            // Frames that fell due while the pulse was open, after the tick it makes.
+            self.deliver_due(edge.t_us);
+        }
     }
 }
 

@@ -2,8 +2,9 @@
 //!
 //! A source pushes, in stream order, decoded CD event batches, trigger edges (stamped with the instant they were
 //! decoded) and depth frames (stamped with their exposure; the replay delivers each before the trigger edge that
-//! completes its phase-coded pulse, or later with `depth_latency_ms`; a live depth camera delivers it when it
-//! arrives, and the tracker uses a late frame at its next tick) into a [`SourceOutput`]. It runs on a blocking thread of the runtime and returns when its stream ends or when
+//! completes its phase-coded pulse, or that much later in stream time with `depth_latency_ms`; a live depth camera
+//! delivers it when it arrives, and the tracker tracks the ticks since its exposure again with it then) into a
+//! [`SourceOutput`]. It runs on a blocking thread of the runtime and returns when its stream ends or when
 //! [`StopFlag::is_set`] says so.
 
 use super::queue::{Ingest, IngestQueue};

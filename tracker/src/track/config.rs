@@ -201,7 +201,8 @@ pub struct TrackerConfig {
     pub max_depth_age_ms: f64,
     /// When a depth frame arrives after its exposure's tick, go back to the tracker's state at that tick (saved
     /// then) and track the ticks since again with the frame in place, as if it had come in time; the poses
-    /// already out stand. `false` instead carries the frame from its exposure to the current tick (cheaper: no
+    /// already out stand. This is done when the frame arrives (between two ticks with a live camera), so it
+    /// delays the next tick only by what it takes beyond the time left until that tick. `false` instead carries the frame from its exposure to the current tick (cheaper: no
     /// ticks tracked again, no states or events kept, but the motion since the exposure stays the events' alone).
     pub retrack_late_depth: bool,
     /// Most events kept for tracking again (24 bytes each): the events since the oldest exposure whose frame has

@@ -42,8 +42,9 @@ pub trait PoseTracker: Send {
     /// Events in time order (non-decreasing `t_us`), all at or before the next tick.
     fn push_events(&mut self, events: &[CdEvent]);
     /// The depth frame exposed at time `t_us` (the depth-exposure tick), in the depth camera's pixels; it may
-    /// arrive after that tick (a live depth camera's latency: EventTrack6D then uses it at the next tick, up to
-    /// [`TrackerConfig::max_depth_age_ms`] after the exposure). A tracker
+    /// arrive after that tick (a live depth camera's latency: EventTrack6D then tracks the ticks since the
+    /// exposure again with it, here, or uses it at the next tick, up to [`TrackerConfig::max_depth_age_ms`] after
+    /// the exposure). A tracker
     /// that keeps the frame takes it without a copy and leaves its previous frame in `frame` (for the caller to
     /// reuse or drop); one that does not leaves `frame` as it is.
     fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame);

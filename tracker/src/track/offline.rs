@@ -19,7 +19,7 @@ pub struct OfflineStats {
     pub depth_frames: u64,
     /// Depth-exposure ticks whose frame file is missing (dropped by the sensor).
     pub depth_frames_missing: u64,
-    /// Depth frames still in transit after the last tick (exposed less than the depth latency before it).
+    /// Depth frames still in transit at the end of the stream (exposed less than the depth latency before it).
     pub depth_frames_in_transit: u64,
     /// Events after the last tick (never followed by a tick).
     pub events_after_last_tick: u64,
@@ -29,13 +29,17 @@ struct Collector<'a> {
     events: &'a mut Vec<CdEvent>,
     timeline: &'a mut TriggerTimeline,
     channel: u8,
+    /// The latest time in the stream so far (event or edge), microseconds.
+    latest_us: &'a mut i64,
 }
 
 impl EventSink for Collector<'_> {
     fn cd(&mut self, event: CdEvent) {
+        *self.latest_us = (*self.latest_us).max(event.t_us);
         self.events.push(event);
     }
     fn trigger(&mut self, edge: TriggerEdge) {
+        *self.latest_us = (*self.latest_us).max(edge.t_us);
         if edge.channel == self.channel {
             self.timeline.push(edge);
         }
@@ -48,7 +52,8 @@ pub struct OfflineTiming {
     /// Ticks before this time (microseconds) only warm up the event state; from it on every tick is estimated.
     pub start_us: i64,
     /// Each depth frame is handed over before the first tick at least this long after its exposure,
-    /// microseconds (a live depth camera's transport latency); 0 = before its own tick.
+    /// microseconds (a live depth camera's transport latency), or after the last tick if the stream still
+    /// reaches that time; 0 = before its own tick.
     pub depth_latency_us: i64,
 }
 
@@ -124,12 +129,14 @@ pub fn track_recording_timed(
         Ok(())
     };
     let path = recording.dir().join("events.raw");
+    let mut latest_us = i64::MIN;
     loop {
         let more = {
             let mut sink = Collector {
                 events: &mut pending,
                 timeline: &mut timeline,
                 channel: schedule.channel,
+                latest_us: &mut latest_us,
             };
             reader.read_chunk(&mut sink).map_err(|e| RecordingError {
                 path: path.clone(),
@@ -146,6 +153,15 @@ pub fn track_recording_timed(
         if !more {
             break;
         }
+    }
+    // Frames that arrive after the last tick, while the stream goes on (as the runtime's replay delivers them).
+    while let Some(&(exposed_us, n)) = in_transit.front()
+        && latest_us >= exposed_us.saturating_add(depth_latency_us)
+    {
+        in_transit.pop_front();
+        let mut frame = recording.depth_frame(n)?;
+        tracker.push_depth(exposed_us, &mut frame);
+        stats.depth_frames += 1;
     }
     stats.events_after_last_tick = pending.len() as u64;
     stats.depth_frames_in_transit = in_transit.len() as u64;

@@ -331,6 +331,7 @@ impl PoseTracker for EventTrack6d {
         }
         std::mem::swap(&mut self.depth, frame);
         self.depth_t_us = Some(t_us);
+        self.retrack_on_arrival();
     }
 
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {

@@ -4,10 +4,16 @@
 //! tracks those ticks again with the frame in place, as if it had come in time; then it tracks the current tick.
 //! The poses already published for those ticks stand; from the current tick on, the estimates are the ones an
 //! on-time frame would have given.
+//!
+//! The work is done when the frame arrives ([`EventTrack6d::retrack_on_arrival`], from `push_depth`): a live
+//! camera's frame comes between two ticks, so the ticks tracked again then stay out of the next tick's latency
+//! unless they take longer than the time left until it. A frame that cannot be placed then (no state at its
+//! exposure, or its events left the log) is left to the next tick, which carries it and counts it.
 
 use super::EventTrack6d;
 use crate::recon::SurfaceLog;
 use crate::render::SceneObject;
+use crate::track::PoseTracker;
 use crate::track::object::ObjectSnapshot;
 use crate::track::{DepthFallbackCheck, PoseEstimate};
 use drivers::timeline::Tick;
@@ -43,6 +49,8 @@ pub(super) struct Retrack {
     replayed: Vec<PoseEstimate>,
     /// The depth safety net's checks made while tracking again before the latest tick, reported as that tick's.
     pub(super) checks: Vec<DepthFallbackCheck>,
+    /// Checks made while tracking again at a frame's arrival, reported with the next tick.
+    arrival_checks: Vec<DepthFallbackCheck>,
 }
 
 impl Retrack {
@@ -55,6 +63,7 @@ impl Retrack {
             log: SurfaceLog::new(max_events),
             replayed: Vec::new(),
             checks: Vec::new(),
+            arrival_checks: Vec::new(),
         }
     }
 
@@ -107,6 +116,33 @@ impl Retrack {
 }
 
 impl EventTrack6d {
+    /// When a depth frame arrives (it is waiting in `depth_t_us`): if it was exposed at a tick already run whose
+    /// state was saved, and the events since are still logged, tracks the ticks from that one to the latest
+    /// again with the frame in place (the frame is used up), and starts the next tick's renders from the new
+    /// estimates. Otherwise the frame waits for the next tick ([`Self::retrack_before`]).
+    pub(super) fn retrack_on_arrival(&mut self) {
+        let (Some(exposed_us), Some(last_us)) = (self.depth_t_us, self.last_tick_us) else {
+            return;
+        };
+        let Some(mut retrack) = self.retrack.take() else {
+            return;
+        };
+        let max_age_us = (self.config.max_depth_age_ms * 1e3) as i64;
+        let (times, count) = self.next_tick.candidates();
+        let next_us = if count > 0 { times[0] } else { last_us + 8_333 };
+        // The next tick would find the frame too old and drop it: it is not used here either.
+        let fresh = next_us - exposed_us <= max_age_us;
+        if fresh && let Some(k) = self.retrack_start(&retrack, exposed_us) {
+            let mut checks = std::mem::take(&mut retrack.arrival_checks);
+            self.track_again(&mut retrack, k, last_us + 1, &mut checks);
+            retrack.arrival_checks = checks;
+            self.retrack = Some(retrack);
+            self.prepare_next_tick();
+        } else {
+            self.retrack = Some(retrack);
+        }
+    }
+
     /// Before `tick` runs: if the depth frame waiting was exposed at an earlier tick whose state was saved, tracks
     /// the ticks from that one to this one again with the frame in place (the frame is used up); then saves the
     /// state if `tick` is a depth-exposure tick whose frame has not come.
@@ -116,11 +152,27 @@ impl EventTrack6d {
         };
         let max_age_us = (self.config.max_depth_age_ms * 1e3) as i64;
         retrack.checks.clear();
+        // Checks made when a frame arrived since the last tick are this tick's.
+        let arrival_checks = retrack
+            .arrival_checks
+            .drain(..)
+            .map(|c| DepthFallbackCheck {
+                tick_us: tick.t_us,
+                ..c
+            });
+        retrack.checks.extend(arrival_checks);
         if let Some(exposed_us) = self.depth_t_us
             && exposed_us < tick.t_us - SAME_TICK_US
             && tick.t_us - exposed_us <= max_age_us
         {
-            self.track_again_from(&mut retrack, exposed_us, tick.t_us);
+            match self.retrack_start(&retrack, exposed_us) {
+                Some(k) => {
+                    let mut checks = std::mem::take(&mut retrack.checks);
+                    self.track_again(&mut retrack, k, tick.t_us, &mut checks);
+                    retrack.checks = checks;
+                }
+                None => self.counters.late_frames_not_retracked += 1,
+            }
         }
         let frame_here = self
             .depth_t_us
@@ -160,26 +212,37 @@ impl EventTrack6d {
         state.last_tick_us = self.last_tick_us;
     }
 
-    /// Tracks the ticks from the saved one at `exposed_us` to just before `now_us` again, with the waiting depth
-    /// frame used at the first of them. Without a saved state there, or events back to it, the frame is left to
-    /// the tick (which carries it from its exposure).
-    fn track_again_from(&mut self, retrack: &mut Retrack, exposed_us: i64, now_us: i64) {
-        let Some(k) = retrack
+    /// The index of the state saved at the tick of a frame exposed at `exposed_us`, if there is one and the event
+    /// log still reaches back to it.
+    fn retrack_start(&self, retrack: &Retrack, exposed_us: i64) -> Option<usize> {
+        let k = retrack
             .states
             .iter()
-            .position(|s| (s.tick.t_us - exposed_us).abs() <= SAME_TICK_US)
-        else {
-            self.counters.late_frames_not_retracked += 1;
-            return;
-        };
+            .position(|s| (s.tick.t_us - exposed_us).abs() <= SAME_TICK_US)?;
+        retrack
+            .log
+            .reaches(retrack.states[k].events_before)
+            .then_some(k)
+    }
+
+    /// Tracks the ticks from the one of state `k` to just before `now_us` again, with the waiting depth frame used
+    /// at the first of them, and leaves the surface at the latest event. The safety net's checks made on the way
+    /// go into `checks`, stamped `now_us`.
+    fn track_again(
+        &mut self,
+        retrack: &mut Retrack,
+        k: usize,
+        now_us: i64,
+        checks: &mut Vec<DepthFallbackCheck>,
+    ) {
         let start_us = retrack.states[k].tick.t_us;
-        if !self
+        let wound = self
             .surface
-            .wind_back(&mut retrack.log, retrack.states[k].events_before)
-        {
-            self.counters.late_frames_not_retracked += 1;
-            return;
-        }
+            .wind_back(&mut retrack.log, retrack.states[k].events_before);
+        debug_assert!(
+            wound,
+            "retrack_start checked that the log reaches the state"
+        );
         {
             let state = &retrack.states[k];
             for (o, s) in self.objects.iter_mut().zip(&state.objects) {
@@ -207,7 +270,7 @@ impl EventTrack6d {
             retrack.replayed.clear();
             self.step_tick(&tick, &mut retrack.replayed, false);
             // The safety net's checks of the frame, made now: reported with the tick that made them.
-            retrack.checks.extend(
+            checks.extend(
                 self.objects
                     .iter()
                     .filter_map(|o| o.fallback_check)
