@@ -171,5 +171,29 @@ enabled = false
         summary.source_stats.depth_in_transit,
         stats.depth_frames_in_transit
     );
+    // Each frame's age when it reached the tracker thread is the latency (on the camera clock), within the gap
+    // between two events before it and the width of a tick pulse after it.
+    assert_eq!(summary.depth_frame_age.samples, stats.depth_frames);
+    assert_eq!(summary.depth_arrival.samples, stats.depth_frames);
+    let latency = latency_us as f64;
+    for age in [
+        summary.depth_frame_age.p50_us,
+        summary.depth_frame_age.max_us,
+    ] {
+        let age = age.expect("ages recorded");
+        assert!(
+            (latency - 1000.0..=latency + 250.0).contains(&age),
+            "a frame {latency} us late reached the tracker {age} us after its exposure"
+        );
+    }
+    assert_eq!(
+        summary.status["ingest"]["depth_frame_age_us"]["samples"],
+        stats.depth_frames
+    );
+    assert!(summary.to_string().contains(&format!(
+        "depth arrival:   {} frames, age p50 {:.1}",
+        stats.depth_frames,
+        summary.depth_frame_age.p50_us.unwrap_or(0.0) * 1e-3
+    )));
     offline_counters
 }

@@ -205,6 +205,12 @@ pub struct Health {
     pub events: u64,
     /// The tracker's own counters, if it keeps any.
     pub tracker: Option<TrackerCounters>,
+    /// How old each depth frame was when it reached the tracker thread: the latest event or edge time handed over
+    /// by then less the frame's exposure, on the event camera's clock (a live depth camera's transport latency).
+    pub depth_frame_age: LatencyHistogram,
+    /// Wall-clock time the tracker took when each depth frame arrived (tracking again from a late frame's
+    /// exposure happens then, between ticks).
+    pub depth_arrival: LatencyHistogram,
 }
 
 impl Health {
@@ -241,6 +247,8 @@ impl Health {
             depth_frames: 0,
             events: 0,
             tracker: None,
+            depth_frame_age: LatencyHistogram::new(),
+            depth_arrival: LatencyHistogram::new(),
         }
     }
 
@@ -300,6 +308,7 @@ impl Health {
             "latency_us": {
                 "overall": latency_json(&self.latency.summary()),
                 "sinks": sink_latency,
+                "depth_arrival": latency_json(&self.depth_arrival.summary()),
             },
             "drops": {
                 "events": self.queue.dropped_events,
@@ -318,6 +327,7 @@ impl Health {
             "ingest": {
                 "events": self.events,
                 "depth_frames": self.depth_frames,
+                "depth_frame_age_us": latency_json(&self.depth_frame_age.summary()),
                 "queue_max_batches": self.queue.max_depth,
             },
             "sinks": sinks,

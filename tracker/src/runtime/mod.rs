@@ -307,6 +307,8 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         tick_rate_hz: h.tick_rate_hz(),
         camera_tick_rate_hz: h.camera_tick_rate_hz(),
         latency: h.latency.summary(),
+        depth_frame_age: h.depth_frame_age.summary(),
+        depth_arrival: h.depth_arrival.summary(),
         sinks: h
             .sinks
             .iter()

@@ -38,6 +38,11 @@ pub struct Summary {
     pub camera_tick_rate_hz: Option<f64>,
     /// Latency from a tick's edge decoded to after the last sink.
     pub latency: LatencySummary,
+    /// Age of the depth frames when they reached the tracker thread, microseconds of the event camera's clock
+    /// ([`super::health::Health::depth_frame_age`]).
+    pub depth_frame_age: LatencySummary,
+    /// Wall-clock time the tracker took at each depth frame's arrival, microseconds.
+    pub depth_arrival: LatencySummary,
     /// Per sink.
     pub sinks: Vec<SinkSummary>,
     /// Queue counters (dropped events).
@@ -135,6 +140,22 @@ impl std::fmt::Display for Summary {
                 c.late_frames_not_retracked,
                 c.late_depth_unplaced,
                 self.source_stats.depth_in_transit
+            )?;
+        }
+        if self.depth_arrival.samples > 0 {
+            let ms =
+                |x: Option<f64>| x.map_or_else(|| "-".to_string(), |x| format!("{:.1}", x * 1e-3));
+            let (a, w) = (&self.depth_frame_age, &self.depth_arrival);
+            writeln!(
+                f,
+                "depth arrival:   {} frames, age p50 {} p99 {} max {} ms (exposure -> tracker thread, camera clock); tracker work then p50 {} p99 {} max {} ms",
+                w.samples,
+                ms(a.p50_us),
+                ms(a.p99_us),
+                ms(a.max_us),
+                ms(w.p50_us),
+                ms(w.p99_us),
+                ms(w.max_us)
             )?;
         }
         if !self.source_stats.anomalies.is_empty() {

@@ -100,6 +100,8 @@ pub struct Worker {
     first_tick_wall: Option<Instant>,
     reported_errors: Vec<bool>,
     latency_log: Option<LatencyLog>,
+    /// The latest event or trigger edge time received, event camera clock, microseconds.
+    stream_us: Option<i64>,
 }
 
 impl Worker {
@@ -127,6 +129,7 @@ impl Worker {
             first_tick_wall: None,
             reported_errors: vec![false; n],
             latency_log: None,
+            stream_us: None,
         }
     }
 
@@ -163,16 +166,30 @@ impl Worker {
             };
             match item {
                 Ingest::Events(events) => {
+                    if let Some(last) = events.last() {
+                        self.stream_us =
+                            Some(self.stream_us.map_or(last.t_us, |t| t.max(last.t_us)));
+                    }
                     self.hold.events(&events, self.tracker.as_mut());
                     let n = events.len() as u64;
                     self.queue.recycle(events);
                     self.health().events += n;
                 }
                 Ingest::Depth { t_us, mut frame } => {
+                    let start = Instant::now();
                     self.tracker.push_depth(t_us, &mut frame);
-                    self.health().depth_frames += 1;
+                    let work = start.elapsed();
+                    let age_us = self.stream_us.map(|now| (now - t_us).max(0));
+                    let mut h = self.health();
+                    h.depth_frames += 1;
+                    h.depth_arrival.record(work);
+                    if let Some(age_us) = age_us {
+                        h.depth_frame_age
+                            .record(Duration::from_micros(age_us.unsigned_abs()));
+                    }
                 }
                 Ingest::Trigger { edge, decoded_at } => {
+                    self.stream_us = Some(self.stream_us.map_or(edge.t_us, |t| t.max(edge.t_us)));
                     self.timeline.push(edge);
                     while let Some(tick) = self.timeline.pop_tick() {
                         self.hold.release_until(tick.t_us, self.tracker.as_mut());
