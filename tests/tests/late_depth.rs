@@ -269,6 +269,93 @@ fn a_late_frame_is_tracked_again_when_it_arrives_not_at_the_next_tick() {
     }
 }
 
+/// Hands every depth frame over deferred ([`PoseTracker::push_depth_deferred`]), as the runtime does with one
+/// that arrives just before a tick.
+struct DeferringDriver(EventTrack6d);
+
+impl PoseTracker for DeferringDriver {
+    fn objects(&self) -> &[String] {
+        self.0.objects()
+    }
+    fn push_events(&mut self, events: &[CdEvent]) {
+        self.0.push_events(events);
+    }
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
+        self.0.push_depth_deferred(t_us, frame);
+    }
+    fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
+        self.0.tick(tick, out);
+    }
+    fn prepare_next_tick(&mut self) {
+        self.0.prepare_next_tick();
+    }
+    fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
+        self.0.pose_at(object, t_us)
+    }
+    fn tracker_counters(&self) -> Option<TrackerCounters> {
+        Some(self.0.counters())
+    }
+}
+
+/// A frame handed over deferred is carried at the tick it arrives before, and the ticks from its exposure to
+/// that one are tracked again after it: every later tick is bit for bit what tracking again at arrival gives,
+/// and only the arrival ticks differ.
+#[test]
+fn a_deferred_frame_is_carried_at_its_tick_and_tracked_again_after_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = mug_recording(&dir.path().join("mug"), 0.5);
+    let (at_arrival, _, stats) = track(&rec, TrackerConfig::default(), 20_000);
+    let (tracker, first_us) = mug_tracker(&rec, TrackerConfig::default());
+    let mut deferring = DeferringDriver(tracker);
+    let mut deferred = Vec::new();
+    let mut arrivals = Vec::new();
+    let timing = OfflineTiming {
+        start_us: first_us,
+        depth_latency_us: 20_000,
+    };
+    let mut frames_seen = 0;
+    track_recording_timed(
+        &rec,
+        &mut deferring,
+        timing,
+        |tick, e, t| {
+            let used = t.tracker_counters().map_or(0, |c| c.depth_frames);
+            if used > frames_seen {
+                arrivals.push(tick.t_us);
+                frames_seen = used;
+            }
+            deferred.extend_from_slice(e);
+        },
+        |_| {},
+    )
+    .expect("replay");
+    let c = deferring.0.counters();
+    assert!(stats.depth_frames >= 12, "{stats:?}");
+    assert_eq!(c.depth_frames, stats.depth_frames, "{c:?}");
+    assert_eq!(c.depth_frames_late, stats.depth_frames, "{c:?}");
+    assert_eq!(c.late_frames_retracked, stats.depth_frames, "{c:?}");
+    assert_eq!(c.late_frames_not_retracked, 0, "{c:?}");
+    // The exposure tick to the arrival tick, which carried the frame: four ticks each.
+    assert_eq!(c.ticks_retracked, 4 * stats.depth_frames, "{c:?}");
+    assert_eq!(arrivals.len() as u64, stats.depth_frames);
+    assert_eq!(deferred.len(), at_arrival.len());
+    let mut differing = 0;
+    for (d, a) in deferred.iter().zip(&at_arrival) {
+        assert_eq!(d.t_us, a.t_us);
+        if arrivals.contains(&d.t_us) {
+            differing += usize::from(d.pose != a.pose);
+        } else {
+            assert_eq!(d.pose, a.pose, "tick {}", d.t_us);
+        }
+    }
+    // The arrival ticks used the frame carried from its exposure, not tracked again.
+    assert!(
+        differing * 2 > arrivals.len(),
+        "{differing} of {} arrival ticks differ",
+        arrivals.len()
+    );
+}
+
 /// What a late frame corrects at its tick, it corrects since its exposure: the history `pose_at` answers from is
 /// nearer the truth than the estimates reported at those ticks. Without latency it is the reported estimates.
 #[test]

@@ -208,9 +208,13 @@ pub struct Health {
     /// How old each depth frame was when it reached the tracker thread: the latest event or edge time handed over
     /// by then less the frame's exposure, on the event camera's clock (a live depth camera's transport latency).
     pub depth_frame_age: LatencyHistogram,
-    /// Wall-clock time the tracker took when each depth frame arrived (tracking again from a late frame's
-    /// exposure happens then, between ticks).
+    /// Wall-clock time the tracker took on each depth frame: when it arrived (tracking again from a late frame's
+    /// exposure happens then, between ticks), or, for a frame handed over deferred, after the tick that carried
+    /// it.
     pub depth_arrival: LatencyHistogram,
+    /// Depth frames held until the next tick's poses were out, because the tracker's work on them would have
+    /// delayed that tick ([`super::depth_arrival::DepthArrival`]).
+    pub depth_frames_deferred: u64,
 }
 
 impl Health {
@@ -249,6 +253,7 @@ impl Health {
             tracker: None,
             depth_frame_age: LatencyHistogram::new(),
             depth_arrival: LatencyHistogram::new(),
+            depth_frames_deferred: 0,
         }
     }
 
@@ -328,6 +333,7 @@ impl Health {
                 "events": self.events,
                 "depth_frames": self.depth_frames,
                 "depth_frame_age_us": latency_json(&self.depth_frame_age.summary()),
+                "depth_frames_deferred": self.depth_frames_deferred,
                 "queue_max_batches": self.queue.max_depth,
             },
             "sinks": sinks,

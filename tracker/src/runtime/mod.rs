@@ -11,6 +11,7 @@
 //! Entry point: [`run`] (a [`Config`] and [`Hooks`] in, a [`Summary`] out).
 
 pub mod config;
+pub mod depth_arrival;
 pub mod health;
 pub mod latency_log;
 pub mod pulse_hold;
@@ -153,6 +154,9 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
         wait_for_room: config.source.pace == Pace::Fast,
         rt_priority: config.tracker.realtime_priority,
         latency_log,
+        // Holding a frame compares the stream's clock with the wall clock: only where they run together.
+        defer_depth: config.tracker.defer_late_depth
+            && (config.source.kind == SourceKind::Live || config.source.pace == Pace::Realtime),
     };
     let result = rt.block_on(run_parts(parts, hooks));
     rt.shutdown_timeout(Duration::from_secs(2));
@@ -177,6 +181,8 @@ struct Parts {
     wait_for_room: bool,
     rt_priority: u8,
     latency_log: Option<LatencyLog>,
+    /// Hold a depth frame that would delay the next tick until its poses are out ([`worker::Worker::with_depth_deferral`]).
+    defer_depth: bool,
 }
 
 fn snapshot(health: &Mutex<Health>) -> Health {
@@ -204,13 +210,15 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         wait_for_room,
         rt_priority,
         latency_log,
+        defer_depth,
     } = p;
     let stop = hooks.stop.clone();
     let describe = source.describe();
 
     // The tracker thread.
     let worker = Worker::new(tracker, sinks, timeline, queue.clone(), health.clone())
-        .with_latency_log(latency_log);
+        .with_latency_log(latency_log)
+        .with_depth_deferral(defer_depth);
     let tracker_thread = std::thread::Builder::new()
         .name("tracker".into())
         .spawn(move || {
@@ -309,6 +317,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         latency: h.latency.summary(),
         depth_frame_age: h.depth_frame_age.summary(),
         depth_arrival: h.depth_arrival.summary(),
+        depth_frames_deferred: h.depth_frames_deferred,
         sinks: h
             .sinks
             .iter()

@@ -43,6 +43,8 @@ pub struct Summary {
     pub depth_frame_age: LatencySummary,
     /// Wall-clock time the tracker took at each depth frame's arrival, microseconds.
     pub depth_arrival: LatencySummary,
+    /// Depth frames held until a tick's poses were out (`[tracker] defer_late_depth`).
+    pub depth_frames_deferred: u64,
     /// Per sink.
     pub sinks: Vec<SinkSummary>,
     /// Queue counters (dropped events).
@@ -148,14 +150,15 @@ impl std::fmt::Display for Summary {
             let (a, w) = (&self.depth_frame_age, &self.depth_arrival);
             writeln!(
                 f,
-                "depth arrival:   {} frames, age p50 {} p99 {} max {} ms (exposure -> tracker thread, camera clock); tracker work then p50 {} p99 {} max {} ms",
+                "depth arrival:   {} frames, age p50 {} p99 {} max {} ms (exposure -> tracker thread, camera clock); tracker work then p50 {} p99 {} max {} ms; {} deferred (carried at the next tick, tracked again after its poses)",
                 w.samples,
                 ms(a.p50_us),
                 ms(a.p99_us),
                 ms(a.max_us),
                 ms(w.p50_us),
                 ms(w.p99_us),
-                ms(w.max_us)
+                ms(w.max_us),
+                self.depth_frames_deferred
             )?;
         }
         if !self.source_stats.anomalies.is_empty() {

@@ -2,6 +2,7 @@
 //! the tracker with exactly the events up to each tick ([`PulseHold`]), hands every tick's estimates to each sink, and measures latency (edge decoded -> after each sink,
 //! and after all sinks). Steady state allocates nothing: buffers are reused and event batches recycled.
 
+use super::depth_arrival::DepthArrival;
 use super::health::Health;
 use super::latency_log::{LatencyLog, TickTiming};
 use super::pulse_hold::PulseHold;
@@ -102,6 +103,12 @@ pub struct Worker {
     latency_log: Option<LatencyLog>,
     /// The latest event or trigger edge time received, event camera clock, microseconds.
     stream_us: Option<i64>,
+    /// The latest tick's time, event camera clock, microseconds.
+    last_tick_us: Option<i64>,
+    /// Whether the tracker works on a late depth frame when it arrives or after the next tick's poses.
+    arrival: DepthArrival,
+    /// Exposure of the frame handed over deferred since the latest tick.
+    deferred_depth_us: Option<i64>,
 }
 
 impl Worker {
@@ -130,12 +137,23 @@ impl Worker {
             reported_errors: vec![false; n],
             latency_log: None,
             stream_us: None,
+            last_tick_us: None,
+            arrival: DepthArrival::new(false, timeline.period_us()),
+            deferred_depth_us: None,
         }
     }
 
     /// Also writes one row per tick into `log` ([`TickTiming`]).
     pub fn with_latency_log(mut self, log: Option<LatencyLog>) -> Self {
         self.latency_log = log;
+        self
+    }
+
+    /// In a real-time run (`enabled`), hands a late depth frame over deferred when the tracker's work on it is
+    /// expected to run into the next tick ([`DepthArrival`], [`PoseTracker::push_depth_deferred`]).
+    pub fn with_depth_deferral(mut self, enabled: bool) -> Self {
+        let period_us = self.timeline.config().period_us();
+        self.arrival = DepthArrival::new(enabled, period_us);
         self
     }
 
@@ -176,16 +194,30 @@ impl Worker {
                     self.health().events += n;
                 }
                 Ingest::Depth { t_us, mut frame } => {
-                    let start = Instant::now();
-                    self.tracker.push_depth(t_us, &mut frame);
-                    let work = start.elapsed();
-                    let age_us = self.stream_us.map(|now| (now - t_us).max(0));
-                    let mut h = self.health();
-                    h.depth_frames += 1;
-                    h.depth_arrival.record(work);
-                    if let Some(age_us) = age_us {
-                        h.depth_frame_age
+                    if let Some(age_us) = self.stream_us.map(|now| (now - t_us).max(0)) {
+                        self.health()
+                            .depth_frame_age
                             .record(Duration::from_micros(age_us.unsigned_abs()));
+                    }
+                    let start = Instant::now();
+                    if self
+                        .arrival
+                        .should_defer(t_us, self.stream_us, self.last_tick_us)
+                    {
+                        self.tracker.push_depth_deferred(t_us, &mut frame);
+                        self.arrival.count_deferred();
+                        // Its work is measured after the next tick ([`Self::tick`]).
+                        self.deferred_depth_us = Some(t_us);
+                        let mut h = self.health();
+                        h.depth_frames += 1;
+                        h.depth_frames_deferred = self.arrival.deferred();
+                    } else {
+                        self.tracker.push_depth(t_us, &mut frame);
+                        let work = start.elapsed();
+                        self.arrival.record(t_us, self.last_tick_us, work);
+                        let mut h = self.health();
+                        h.depth_frames += 1;
+                        h.depth_arrival.record(work);
                     }
                 }
                 Ingest::Trigger { edge, decoded_at } => {
@@ -302,9 +334,16 @@ impl Worker {
             }
         }
         drop(h);
-        // The poses are out: start the next tick's work (its renders) in the time until it arrives.
+        self.last_tick_us = Some(tick.t_us);
+        // The poses are out: start the next tick's work (its renders, and tracking again for a frame deferred)
+        // in the time until it arrives.
         let prepare_start = Instant::now();
         self.tracker.prepare_next_tick();
+        if let Some(t_us) = self.deferred_depth_us.take() {
+            let work = prepare_start.elapsed();
+            self.arrival.record(t_us, self.last_tick_us, work);
+            self.health().depth_arrival.record(work);
+        }
         if let Some(log) = &mut self.latency_log {
             log.record(&TickTiming {
                 t_us: tick.t_us,

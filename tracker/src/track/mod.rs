@@ -48,6 +48,13 @@ pub trait PoseTracker: Send {
     /// that keeps the frame takes it without a copy and leaves its previous frame in `frame` (for the caller to
     /// reuse or drop); one that does not leaves `frame` as it is.
     fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame);
+    /// Like [`Self::push_depth`] for a frame that arrives just before a tick: what the frame costs beyond that
+    /// tick's own use of it is left until [`Self::prepare_next_tick`], after the tick's poses are out
+    /// (EventTrack6D: the tick carries a late frame from its exposure, and the ticks since the exposure are
+    /// tracked again afterwards). By default the same as `push_depth`.
+    fn push_depth_deferred(&mut self, t_us: i64, frame: &mut DepthFrame) {
+        self.push_depth(t_us, frame);
+    }
     /// Estimates every object's pose at `tick` and appends one [`PoseEstimate`] per object to `out`.
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>);
     /// Work for the next tick that need not delay this tick's poses (EventTrack6D: start its renders,

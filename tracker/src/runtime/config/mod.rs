@@ -160,8 +160,8 @@ pub struct SourceConfig {
     #[serde(default)]
     pub start_delay_ms: u64,
     /// Replay only: deliver each depth frame this long after its exposure (stream time), as a live depth
-    /// camera's transport does, ms; 0 = with the trigger pulse of its exposure. The tracker uses a late frame
-    /// at the first tick after it arrives (`max_depth_age_ms`).
+    /// camera's transport does, ms; 0 = with the trigger pulse of its exposure. The tracker tracks the ticks
+    /// since its exposure again when it arrives (`retrack_late_depth`, `max_depth_age_ms`).
     #[serde(default)]
     pub depth_latency_ms: f64,
 }
@@ -233,6 +233,10 @@ pub struct TrackerConfig {
     pub realtime_priority: u8,
     /// Renderer of the tracker's render-and-compare: `cpu` (default, deterministic) or `gpu` (wgpu / Vulkan).
     pub renderer: crate::render::RendererKind,
+    /// In a real-time run (a live rig, or a replay at `pace = "realtime"`), a depth frame that arrives when the
+    /// tracker's work at the previous frame would not be done before the next tick is handed over right after
+    /// that tick's poses are out, so the tick does not wait (that tick then lacks the frame). Default true.
+    pub defer_late_depth: bool,
     /// `[tracker.parameters]`: the tracker's parameters, the keys of `track --params` (each method's preset, e.g.
     /// `depth30`'s, applies on top); every key defaults.
     pub parameters: crate::track::TrackerConfig,
@@ -244,6 +248,7 @@ impl Default for TrackerConfig {
             method: "eventtrack6d".into(),
             realtime_priority: 0,
             renderer: crate::render::RendererKind::Cpu,
+            defer_late_depth: true,
             parameters: crate::track::TrackerConfig::default(),
         }
     }

@@ -54,6 +54,22 @@ pub struct EventTrack6d {
     /// States at recent depth-exposure ticks and the events since, to track again from a late frame's exposure
     /// ([`TrackerConfig::retrack_late_depth`]); `None` when off.
     retrack: Option<Box<Retrack>>,
+    /// Whether the next tick's renders were started since the latest estimates changed ([`Self::prepare_next_tick`]).
+    prepared: bool,
+    /// A late frame handed over with [`PoseTracker::push_depth_deferred`]: the next tick carries it, and this is
+    /// its exposure from then until it is tracked again from there after that tick.
+    deferred: Deferred,
+}
+
+/// Where a frame handed over deferred is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Deferred {
+    /// None waits.
+    No,
+    /// It waits for the next tick.
+    BeforeTick,
+    /// The tick carried the frame exposed then; tracking again from there waits for `prepare_next_tick`.
+    AfterTick(i64),
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -189,6 +205,8 @@ impl EventTrack6d {
             counters: TrackerCounters::default(),
             redetection,
             retrack: config_retrack.then(|| Box::new(Retrack::new(retrack_events))),
+            prepared: false,
+            deferred: Deferred::No,
         };
         tracker.render_first_rois()?;
         Ok(tracker)
@@ -293,10 +311,27 @@ impl EventTrack6d {
         match self.objects.get_mut(k) {
             Some(o) if finite => {
                 o.reset(t_us, pose);
+                self.prepared = false;
                 true
             }
             _ => false,
         }
+    }
+
+    /// Takes `frame`, exposed at `t_us`, as the waiting depth frame (the previous one comes back in `frame`).
+    fn take_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
+        if let Deferred::AfterTick(exposed_us) = self.deferred {
+            // Tracking again needs the frame the tick carried, which this one replaces.
+            self.deferred = Deferred::No;
+            self.retrack_deferred(exposed_us);
+        }
+        self.catch_up_background();
+        if self.depth_t_us.is_some() {
+            self.counters.depth_frames_unused += 1;
+        }
+        std::mem::swap(&mut self.depth, frame);
+        self.depth_t_us = Some(t_us);
+        self.deferred = Deferred::No;
     }
 
     /// Folds the depth frame of the latest depth tick into the re-detection background, if it is not yet.
@@ -325,21 +360,33 @@ impl PoseTracker for EventTrack6d {
     }
 
     fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
-        self.catch_up_background();
-        if self.depth_t_us.is_some() {
-            self.counters.depth_frames_unused += 1;
-        }
-        std::mem::swap(&mut self.depth, frame);
-        self.depth_t_us = Some(t_us);
+        self.take_depth(t_us, frame);
         self.retrack_on_arrival();
     }
 
+    fn push_depth_deferred(&mut self, t_us: i64, frame: &mut DepthFrame) {
+        self.take_depth(t_us, frame);
+        if self.retrack.is_some() {
+            self.deferred = Deferred::BeforeTick;
+        }
+    }
+
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
+        self.prepared = false;
         self.retrack_before(tick);
         self.step_tick(tick, out, true);
     }
 
     fn prepare_next_tick(&mut self) {
+        if let Deferred::AfterTick(exposed_us) = self.deferred {
+            self.deferred = Deferred::No;
+            self.retrack_deferred(exposed_us);
+        }
+        if self.prepared {
+            // Started already for these estimates (after tracking again when a frame arrived).
+            return;
+        }
+        self.prepared = true;
         self.catch_up_background();
         if self.config.prefetch_renders && self.refines(false) {
             // What the last tick did not take, the next one will not either.

@@ -10,7 +10,7 @@
 //! unless they take longer than the time left until it. A frame that cannot be placed then (no state at its
 //! exposure, or its events left the log) is left to the next tick, which carries it and counts it.
 
-use super::EventTrack6d;
+use super::{Deferred, EventTrack6d};
 use crate::recon::SurfaceLog;
 use crate::render::SceneObject;
 use crate::track::PoseTracker;
@@ -137,9 +137,28 @@ impl EventTrack6d {
             self.track_again(&mut retrack, k, last_us + 1, &mut checks);
             retrack.arrival_checks = checks;
             self.retrack = Some(retrack);
+            self.prepared = false;
             self.prepare_next_tick();
         } else {
             self.retrack = Some(retrack);
+        }
+    }
+
+    /// After a tick carried the late frame exposed at `exposed_us` (handed over deferred): tracks the ticks from
+    /// its exposure to that tick again with it, as [`Self::retrack_on_arrival`] would have before the tick. The
+    /// frame was counted, and its safety-net check reported, by the tick that carried it.
+    pub(super) fn retrack_deferred(&mut self, exposed_us: i64) {
+        let counted = self.counters;
+        self.depth_t_us = Some(exposed_us);
+        self.retrack_on_arrival();
+        if self.depth_t_us.take().is_some() {
+            self.counters.late_frames_not_retracked += 1;
+            return;
+        }
+        self.counters.depth_frames = counted.depth_frames;
+        self.counters.depth_frames_late = counted.depth_frames_late;
+        if let Some(r) = self.retrack.as_mut() {
+            r.arrival_checks.clear();
         }
     }
 
@@ -161,11 +180,15 @@ impl EventTrack6d {
                 ..c
             });
         retrack.checks.extend(arrival_checks);
+        let defer = self.deferred == Deferred::BeforeTick;
+        self.deferred = Deferred::No;
         if let Some(exposed_us) = self.depth_t_us
             && exposed_us < tick.t_us - SAME_TICK_US
             && tick.t_us - exposed_us <= max_age_us
         {
             match self.retrack_start(&retrack, exposed_us) {
+                // This tick carries the frame; tracking again waits until its poses are out.
+                Some(_) if defer => self.deferred = Deferred::AfterTick(exposed_us),
                 Some(k) => {
                     let mut checks = std::mem::take(&mut retrack.checks);
                     self.track_again(&mut retrack, k, tick.t_us, &mut checks);
