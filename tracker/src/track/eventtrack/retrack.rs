@@ -10,7 +10,7 @@
 //! unless they take longer than the time left until it. A frame that cannot be placed then (no state at its
 //! exposure, or its events left the log) is left to the next tick, which carries it and counts it.
 
-use super::{Deferred, EventTrack6d};
+use super::EventTrack6d;
 use crate::recon::SurfaceLog;
 use crate::render::SceneObject;
 use crate::track::PoseTracker;
@@ -18,6 +18,17 @@ use crate::track::object::ObjectSnapshot;
 use crate::track::{DepthFallbackCheck, PoseEstimate};
 use drivers::timeline::Tick;
 use std::collections::VecDeque;
+
+/// Where a frame handed over deferred is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Deferred {
+    /// None waits.
+    No,
+    /// It waits for the next tick.
+    BeforeTick,
+    /// The tick carried the frame exposed then; tracking again from there waits for `prepare_next_tick`.
+    AfterTick(i64),
+}
 
 /// Half a tick period, microseconds: a depth frame belongs to the tick whose time is this close to its exposure.
 const SAME_TICK_US: i64 = 4_200;
