@@ -215,6 +215,8 @@ pub struct Health {
     /// Depth frames held until the next tick's poses were out, because the tracker's work on them would have
     /// delayed that tick ([`super::depth_arrival::DepthArrival`]).
     pub depth_frames_deferred: u64,
+    /// Depth frames that reached the tracker thread older than the tracker uses (`max_depth_age_ms`).
+    pub depth_frames_too_old: u64,
 }
 
 impl Health {
@@ -254,6 +256,7 @@ impl Health {
             depth_frame_age: LatencyHistogram::new(),
             depth_arrival: LatencyHistogram::new(),
             depth_frames_deferred: 0,
+            depth_frames_too_old: 0,
         }
     }
 
@@ -334,6 +337,7 @@ impl Health {
                 "depth_frames": self.depth_frames,
                 "depth_frame_age_us": latency_json(&self.depth_frame_age.summary()),
                 "depth_frames_deferred": self.depth_frames_deferred,
+                "depth_frames_too_old": self.depth_frames_too_old,
                 "queue_max_batches": self.queue.max_depth,
             },
             "sinks": sinks,

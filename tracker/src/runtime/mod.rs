@@ -157,6 +157,9 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
         // Holding a frame compares the stream's clock with the wall clock: only where they run together.
         defer_depth: config.tracker.defer_late_depth
             && (config.source.kind == SourceKind::Live || config.source.pace == Pace::Realtime),
+        // A frame within half a tick of its own tick is used whatever its age.
+        depth_age_limit_ms: (config.tracker.method != "static")
+            .then(|| config.tracker.parameters.max_depth_age_ms.max(4.2)),
     };
     let result = rt.block_on(run_parts(parts, hooks));
     rt.shutdown_timeout(Duration::from_secs(2));
@@ -183,6 +186,8 @@ struct Parts {
     latency_log: Option<LatencyLog>,
     /// Hold a depth frame that would delay the next tick until its poses are out ([`worker::Worker::with_depth_deferral`]).
     defer_depth: bool,
+    /// Warn when a depth frame arrives older than this, ms ([`worker::Worker::with_depth_age_limit`]).
+    depth_age_limit_ms: Option<f64>,
 }
 
 fn snapshot(health: &Mutex<Health>) -> Health {
@@ -211,6 +216,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         rt_priority,
         latency_log,
         defer_depth,
+        depth_age_limit_ms,
     } = p;
     let stop = hooks.stop.clone();
     let describe = source.describe();
@@ -218,7 +224,8 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
     // The tracker thread.
     let worker = Worker::new(tracker, sinks, timeline, queue.clone(), health.clone())
         .with_latency_log(latency_log)
-        .with_depth_deferral(defer_depth);
+        .with_depth_deferral(defer_depth)
+        .with_depth_age_limit(depth_age_limit_ms);
     let tracker_thread = std::thread::Builder::new()
         .name("tracker".into())
         .spawn(move || {
@@ -318,6 +325,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         depth_frame_age: h.depth_frame_age.summary(),
         depth_arrival: h.depth_arrival.summary(),
         depth_frames_deferred: h.depth_frames_deferred,
+        depth_frames_too_old: h.depth_frames_too_old,
         sinks: h
             .sinks
             .iter()

@@ -45,6 +45,8 @@ pub struct Summary {
     pub depth_arrival: LatencySummary,
     /// Depth frames held until a tick's poses were out (`[tracker] defer_late_depth`).
     pub depth_frames_deferred: u64,
+    /// Depth frames that arrived older than the tracker uses (`max_depth_age_ms`).
+    pub depth_frames_too_old: u64,
     /// Per sink.
     pub sinks: Vec<SinkSummary>,
     /// Queue counters (dropped events).
@@ -150,7 +152,7 @@ impl std::fmt::Display for Summary {
             let (a, w) = (&self.depth_frame_age, &self.depth_arrival);
             writeln!(
                 f,
-                "depth arrival:   {} frames, age p50 {} p99 {} max {} ms (exposure -> tracker thread, camera clock); tracker work then p50 {} p99 {} max {} ms; {} deferred (carried at the next tick, tracked again after its poses)",
+                "depth arrival:   {} frames, age p50 {} p99 {} max {} ms (exposure -> tracker thread, camera clock); tracker work then p50 {} p99 {} max {} ms; {} deferred (carried at the next tick, tracked again after its poses); {} older than max_depth_age_ms",
                 w.samples,
                 ms(a.p50_us),
                 ms(a.p99_us),
@@ -158,7 +160,8 @@ impl std::fmt::Display for Summary {
                 ms(w.p50_us),
                 ms(w.p99_us),
                 ms(w.max_us),
-                self.depth_frames_deferred
+                self.depth_frames_deferred,
+                self.depth_frames_too_old
             )?;
         }
         if !self.source_stats.anomalies.is_empty() {

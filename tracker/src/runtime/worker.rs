@@ -109,6 +109,10 @@ pub struct Worker {
     arrival: DepthArrival,
     /// Exposure of the frame handed over deferred since the latest tick.
     deferred_depth_us: Option<i64>,
+    /// Oldest depth frame the tracker uses, microseconds after its exposure (`max_depth_age_ms`), if it says.
+    depth_age_limit_us: Option<i64>,
+    /// Whether a frame older than that was reported.
+    reported_old_depth: bool,
 }
 
 impl Worker {
@@ -140,6 +144,8 @@ impl Worker {
             last_tick_us: None,
             arrival: DepthArrival::new(false, timeline.period_us()),
             deferred_depth_us: None,
+            depth_age_limit_us: None,
+            reported_old_depth: false,
         }
     }
 
@@ -154,6 +160,13 @@ impl Worker {
     pub fn with_depth_deferral(mut self, enabled: bool) -> Self {
         let period_us = self.timeline.config().period_us();
         self.arrival = DepthArrival::new(enabled, period_us);
+        self
+    }
+
+    /// Warns (once) when a depth frame reaches the tracker thread more than `limit_ms` after its exposure: the
+    /// tracker does not use such frames (`max_depth_age_ms`), so a slow depth camera leaves it on events alone.
+    pub fn with_depth_age_limit(mut self, limit_ms: Option<f64>) -> Self {
+        self.depth_age_limit_us = limit_ms.map(|ms| (ms * 1e3).round() as i64);
         self
     }
 
@@ -198,6 +211,24 @@ impl Worker {
                         self.health()
                             .depth_frame_age
                             .record(Duration::from_micros(age_us.unsigned_abs()));
+                        let too_old = self.depth_age_limit_us.is_some_and(|l| age_us > l);
+                        if too_old {
+                            self.health().depth_frames_too_old += 1;
+                        }
+                        if let Some(limit_us) = self.depth_age_limit_us
+                            && too_old
+                            && !self.reported_old_depth
+                        {
+                            self.reported_old_depth = true;
+                            eprintln!(
+                                "warning: a depth frame reached the tracker {:.1} ms after its exposure, more than \
+                                 max_depth_age_ms = {:.0}: the tracker does not use such frames (counted as unused); \
+                                 raise [tracker.parameters] max_depth_age_ms or reduce the depth camera's latency \
+                                 (further ones are counted)",
+                                age_us as f64 * 1e-3,
+                                limit_us as f64 * 1e-3
+                            );
+                        }
                     }
                     let start = Instant::now();
                     if self
