@@ -286,6 +286,7 @@ fn late_checks(
     let timing = OfflineTiming {
         start_us: first,
         depth_latency_us: latency_us,
+        depth_jitter_us: 0,
     };
     let mut checks = Vec::new();
     let mut all = Vec::new();

@@ -34,6 +34,7 @@ fn track(
     let timing = OfflineTiming {
         start_us: first_us,
         depth_latency_us: latency_us,
+        depth_jitter_us: 0,
     };
     let stats = track_recording_timed(
         rec,
@@ -234,6 +235,7 @@ fn a_late_frame_is_tracked_again_when_it_arrives_not_at_the_next_tick() {
         let timing = OfflineTiming {
             start_us: first_us,
             depth_latency_us: 20_000,
+            depth_jitter_us: 0,
         };
         let stats =
             track_recording_timed(&rec, &mut probe, timing, |_, _, _| {}, |_| {}).expect("replay");
@@ -312,6 +314,7 @@ fn a_deferred_frame_is_carried_at_its_tick_and_tracked_again_after_it() {
     let timing = OfflineTiming {
         start_us: first_us,
         depth_latency_us: 20_000,
+        depth_jitter_us: 0,
     };
     let mut frames_seen = 0;
     track_recording_timed(
@@ -446,6 +449,7 @@ fn the_offline_driver_hands_each_frame_over_at_the_first_tick_that_late() {
         let timing = OfflineTiming {
             start_us: 0,
             depth_latency_us: latency_us,
+            depth_jitter_us: 0,
         };
         let stats = track_recording_timed(&rec, &mut log, timing, |_, _, _| {}, |_| {}).unwrap();
         let delivered: Vec<i64> = log.arrivals.iter().map(|a| a.0).collect();

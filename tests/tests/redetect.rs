@@ -58,6 +58,7 @@ fn run_late(recording: &Recording, config: TrackerConfig, latency_us: i64) -> Ru
     let timing = OfflineTiming {
         start_us: first,
         depth_latency_us: latency_us,
+        depth_jitter_us: 0,
     };
     track_recording_timed(
         recording,

@@ -40,7 +40,7 @@ fn a_pushed_depth_frame_moves_in_and_the_previous_one_comes_back() {
 
 #[test]
 fn a_fast_replay_gives_the_offline_poses_exactly() {
-    replay_matches_offline(0);
+    replay_matches_offline(0, 0);
 }
 
 /// With depth frames delivered 40 ms after their exposure (`[source] depth_latency_ms`, `track
@@ -49,7 +49,7 @@ fn a_fast_replay_gives_the_offline_poses_exactly() {
 /// the exposure when the frame arrives, so the two give the same poses.
 #[test]
 fn a_fast_replay_with_late_depth_gives_the_offline_poses_exactly() {
-    let counters = replay_matches_offline(40_000);
+    let counters = replay_matches_offline(40_000, 0);
     assert!(counters.depth_frames_late >= 10, "{counters:?}");
     assert_eq!(counters.depth_frames_late, counters.depth_frames);
     assert_eq!(counters.late_frames_retracked, counters.depth_frames);
@@ -59,15 +59,26 @@ fn a_fast_replay_with_late_depth_gives_the_offline_poses_exactly() {
 /// pulse's falling edge: the tick it makes is stamped before the frame was due and runs without it, as offline.
 #[test]
 fn a_frame_due_inside_a_tick_pulse_comes_after_the_pulse_as_offline() {
-    let counters = replay_matches_offline(25_050);
+    let counters = replay_matches_offline(25_050, 0);
     assert!(counters.depth_frames_late >= 10, "{counters:?}");
     // Tracked again from the exposure: the exposure tick and the three after it.
     assert_eq!(counters.ticks_retracked, 4 * counters.late_frames_retracked);
 }
 
-/// Replays the two-object scene offline and through the runtime with depth frames `latency_us` late, checks both
-/// gave the same estimates and counters, and returns the counters.
-fn replay_matches_offline(latency_us: i64) -> TrackerCounters {
+/// A latency that varies from frame to frame (20 ms plus up to 25 ms, drawn per frame from its exposure time):
+/// both draw the same for each frame, so they still agree, and the frames land at different places between ticks.
+#[test]
+fn a_fast_replay_with_jittered_depth_latency_gives_the_offline_poses_exactly() {
+    let counters = replay_matches_offline(20_000, 25_000);
+    assert!(counters.depth_frames_late >= 10, "{counters:?}");
+    // Tracked again over 3 to 6 ticks each (the exposure tick to the one before the arrival), not always the same.
+    let per_frame = counters.ticks_retracked as f64 / counters.late_frames_retracked as f64;
+    assert!(per_frame > 3.0 && per_frame < 6.0, "{counters:?}");
+}
+
+/// Replays the two-object scene offline and through the runtime with depth frames `latency_us` late plus up to
+/// `jitter_us`, checks both gave the same estimates and counters, and returns the counters.
+fn replay_matches_offline(latency_us: i64, jitter_us: i64) -> TrackerCounters {
     let dir = tempfile::tempdir().unwrap();
     let rec_dir = dir.path().join("rec");
     let rec = mug_and_can_recording(&rec_dir);
@@ -86,6 +97,7 @@ fn replay_matches_offline(latency_us: i64) -> TrackerCounters {
     let timing = OfflineTiming {
         start_us: scene.objects[0].first_pose.0,
         depth_latency_us: latency_us,
+        depth_jitter_us: jitter_us,
     };
     let stats = track_recording_timed(
         &rec,
@@ -117,6 +129,7 @@ fn replay_matches_offline(latency_us: i64) -> TrackerCounters {
 kind = "replay"
 pace = "fast"
 depth_latency_ms = {}
+depth_latency_jitter_ms = {}
 [replay]
 recording = "{}"
 [tracker]
@@ -132,6 +145,7 @@ zenoh = false
 enabled = false
 "#,
         latency_us as f64 * 1e-3,
+        jitter_us as f64 * 1e-3,
         rec_dir.display(),
         out_dir.display()
     );
@@ -182,7 +196,7 @@ enabled = false
     ] {
         let age = age.expect("ages recorded");
         assert!(
-            (latency - 1000.0..=latency + 250.0).contains(&age),
+            (latency - 1000.0..=latency + jitter_us as f64 + 250.0).contains(&age),
             "a frame {latency} us late reached the tracker {age} us after its exposure"
         );
     }

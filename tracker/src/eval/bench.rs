@@ -8,6 +8,7 @@ use super::sequence::{
     EvalError, ObjectSequence, PoseTrack, Summary, evaluate_object, ground_truth_objects,
     recording_ticks, summarise,
 };
+use crate::track::DepthTransport;
 use drivers::recording::Recording;
 use drivers::timeline::Tick;
 use nalgebra::Isometry3;
@@ -111,19 +112,24 @@ pub fn method_from_spec_with(
     spec: &str,
     base: &crate::track::TrackerConfig,
 ) -> Result<Box<dyn Method>, String> {
-    method_from_spec_timed(spec, base, 0)
+    method_from_spec_timed(spec, base, DepthTransport::default())
 }
 
-/// [`method_from_spec_with`] with the tracker methods' depth frames handed over `depth_latency_us` microseconds
-/// after their exposure ([`crate::track::TrackerMethod::with_depth_latency`]); the harness methods ignore it.
+/// [`method_from_spec_with`] with the tracker methods' depth frames handed over as `transport` delivers them
+/// ([`crate::track::TrackerMethod::with_depth_latency`], [`crate::track::TrackerMethod::with_depth_jitter`]);
+/// the harness methods ignore it.
 pub fn method_from_spec_timed(
     spec: &str,
     base: &crate::track::TrackerConfig,
-    depth_latency_us: i64,
+    transport: DepthTransport,
 ) -> Result<Box<dyn Method>, String> {
     let spec = spec.trim();
     if let Some(method) = tracker_method_from_spec(spec, base) {
-        return Ok(Box::new(method?.with_depth_latency(depth_latency_us)));
+        return Ok(Box::new(
+            method?
+                .with_depth_latency(transport.latency_us)
+                .with_depth_jitter(transport.jitter_us),
+        ));
     }
     if spec == "static" {
         return Ok(Box::new(StaticMethod));

@@ -7,6 +7,7 @@
 
 use super::config::Pace;
 use super::source::{Source, SourceError, SourceOutput, SourceStats, StopFlag};
+use crate::track::DepthTransport;
 use drivers::event::{CdEvent, EventBuffer, TriggerEdge};
 use drivers::recording::{DepthFrame, Recording};
 use std::collections::VecDeque;
@@ -20,7 +21,7 @@ pub struct ReplaySource {
     batch_events: usize,
     batch_us: i64,
     start_delay: Duration,
-    depth_latency_us: i64,
+    depth_transport: DepthTransport,
 }
 
 impl ReplaySource {
@@ -39,7 +40,7 @@ impl ReplaySource {
             batch_events: batch_events.max(1),
             batch_us: batch_us.max(1),
             start_delay,
-            depth_latency_us: 0,
+            depth_transport: DepthTransport::default(),
         }
     }
 
@@ -48,7 +49,14 @@ impl ReplaySource {
     /// frame due while a tick pulse is open comes after the pulse's falling edge, so the tick that pulse makes
     /// (stamped at its rising edge, before the frame was due) runs without it, as in the offline driver.
     pub fn with_depth_latency(mut self, latency_us: i64) -> Self {
-        self.depth_latency_us = latency_us.max(0);
+        self.depth_transport = DepthTransport::new(latency_us, self.depth_transport.jitter_us);
+        self
+    }
+
+    /// The same replay with up to `jitter_us` microseconds more for each frame, drawn per frame from its exposure
+    /// time as the offline driver draws it ([`DepthTransport`]); frames stay in order.
+    pub fn with_depth_jitter(mut self, jitter_us: i64) -> Self {
+        self.depth_transport = DepthTransport::new(self.depth_transport.latency_us, jitter_us);
         self
     }
 
@@ -121,9 +129,9 @@ struct Replayer<'a> {
     depth: Receiver<DepthItem>,
     next_depth: Option<DepthItem>,
     depth_done: bool,
-    depth_latency_us: i64,
-    /// Frames exposed but not yet delivered (exposure time, frame), oldest first.
-    in_transit: VecDeque<(i64, Box<DepthFrame>)>,
+    transport: DepthTransport,
+    /// Frames exposed but not yet delivered (exposure time, arrival time, frame), oldest first.
+    in_transit: VecDeque<(i64, i64, Box<DepthFrame>)>,
     stats: SourceStats,
 }
 
@@ -136,22 +144,16 @@ impl Replayer<'_> {
         }
     }
 
-    /// Delivers the frames in transit that are due by stream time `t_us` (their exposure plus the latency).
+    /// Delivers the frames in transit that are due by stream time `t_us`.
     fn deliver_due(&mut self, t_us: i64) {
-        let latency = self.depth_latency_us;
-        if self
-            .in_transit
-            .front()
-            .is_none_or(|(exposed_us, _)| t_us < exposed_us.saturating_add(latency))
-        {
+        if self.in_transit.front().is_none_or(|f| t_us < f.1) {
             return;
         }
         self.flush();
-        while let Some((exposed_us, _)) = self.in_transit.front()
-            && t_us >= exposed_us.saturating_add(latency)
-            && let Some((exposed_us, frame)) = self.in_transit.pop_front()
+        while self.in_transit.front().is_some_and(|f| t_us >= f.1)
+            && let Some((exposed_us, due_us, frame)) = self.in_transit.pop_front()
         {
-            self.pacer.until(exposed_us.saturating_add(latency));
+            self.pacer.until(due_us);
             self.stats.depth_frames += 1;
             self.out.depth(exposed_us, frame);
         }
@@ -214,8 +216,9 @@ impl Replayer<'_> {
                     let n = self.wide_pulses;
                     self.wide_pulses += 1;
                     match self.depth_frame(n) {
-                        Some(frame) if self.depth_latency_us > 0 => {
-                            self.in_transit.push_back((rise, Box::new(frame)));
+                        Some(frame) if !self.transport.is_immediate() => {
+                            let due = self.transport.due_us(rise);
+                            self.in_transit.push_back((rise, due, Box::new(frame)));
                         }
                         Some(frame) => {
                             self.stats.depth_frames += 1;
@@ -268,7 +271,7 @@ impl Source for ReplaySource {
             depth: spawn_depth_reader(&self.recording, stop.clone()),
             next_depth: None,
             depth_done: false,
-            depth_latency_us: self.depth_latency_us,
+            transport: self.depth_transport,
             in_transit: VecDeque::with_capacity(16),
             stats: SourceStats::default(),
         };

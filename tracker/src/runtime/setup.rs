@@ -232,7 +232,8 @@ pub fn build_source(
                 config.queue.batch_us,
                 Duration::from_millis(config.source.start_delay_ms),
             )
-            .with_depth_latency((config.source.depth_latency_ms * 1e3).round() as i64);
+            .with_depth_latency((config.source.depth_latency_ms * 1e3).round() as i64)
+            .with_depth_jitter((config.source.depth_latency_jitter_ms * 1e3).round() as i64);
             Ok((Box::new(source), scene, timeline))
         }
         SourceKind::Live => Err(RuntimeError::Source(SourceError::NotImplemented(

@@ -125,6 +125,8 @@ pub struct TrackerMethod {
     init_noise: Option<InitNoise>,
     /// Each depth frame reaches the tracker this long after its exposure, microseconds.
     depth_latency_us: i64,
+    /// And up to this much more, drawn per frame, microseconds.
+    depth_jitter_us: i64,
     renderer: Box<dyn Fn() -> Result<Box<dyn Renderer + Send>, String>>,
 }
 
@@ -137,6 +139,7 @@ impl TrackerMethod {
             config: method.configure(base),
             init_noise: None,
             depth_latency_us: 0,
+            depth_jitter_us: 0,
             renderer: Box::new(|| Ok(Box::new(CpuRenderer::new()))),
         }
     }
@@ -166,6 +169,13 @@ impl TrackerMethod {
     /// first tick that late), as a live depth camera delivers it ([`OfflineTiming::depth_latency_us`]).
     pub fn with_depth_latency(mut self, latency_us: i64) -> Self {
         self.depth_latency_us = latency_us.max(0);
+        self
+    }
+
+    /// The same method with each depth frame up to `jitter_us` microseconds later still, drawn per frame
+    /// ([`OfflineTiming::depth_jitter_us`]).
+    pub fn with_depth_jitter(mut self, jitter_us: i64) -> Self {
+        self.depth_jitter_us = jitter_us.max(0);
         self
     }
 
@@ -225,6 +235,7 @@ impl Method for TrackerMethod {
         let timing = OfflineTiming {
             start_us: t0,
             depth_latency_us: self.depth_latency_us,
+            depth_jitter_us: self.depth_jitter_us,
         };
         track_recording_timed(
             rec,

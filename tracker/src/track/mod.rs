@@ -7,6 +7,7 @@
 
 mod bench_method;
 mod config;
+mod depth_transport;
 mod estimate;
 mod eventtrack;
 mod fallback_check;
@@ -19,6 +20,7 @@ mod validate;
 
 pub use bench_method::{InitNoise, TrackerMethod, recording_object, recording_rig, tracking_rig};
 pub use config::{DepthUse, QualityConfig, TrackerConfig, TrackingMethod};
+pub use depth_transport::DepthTransport;
 pub use estimate::{PoseEstimate, ReportedState, TrackingState};
 pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, TrackingRig};
 pub use fallback_check::{

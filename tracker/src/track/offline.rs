@@ -2,7 +2,7 @@
 //! order of inputs the real-time runtime produces — events up to a tick, the depth frame exposed at the tick (or,
 //! with a depth latency, the frames that have arrived by then), the tick — without pacing.
 
-use super::{PoseEstimate, PoseTracker};
+use super::{DepthTransport, PoseEstimate, PoseTracker};
 use drivers::event::{CdEvent, EventSink, TriggerEdge};
 use drivers::recording::{Recording, RecordingError};
 use drivers::timeline::{Tick, TriggerTimeline};
@@ -55,6 +55,9 @@ pub struct OfflineTiming {
     /// microseconds (a live depth camera's transport latency), or after the last tick if the stream still
     /// reaches that time; 0 = before its own tick.
     pub depth_latency_us: i64,
+    /// Up to this much more for each frame, microseconds, drawn per frame ([`DepthTransport`]); frames stay in
+    /// order.
+    pub depth_jitter_us: i64,
 }
 
 /// Replays `recording` into `tracker`: ticks before `start_us` only warm up the event state; from `start_us` on,
@@ -70,6 +73,7 @@ pub fn track_recording(
     let timing = OfflineTiming {
         start_us,
         depth_latency_us: 0,
+        depth_jitter_us: 0,
     };
     track_recording_timed(recording, tracker, timing, on_tick, on_progress)
 }
@@ -85,15 +89,17 @@ pub fn track_recording_timed(
     let OfflineTiming {
         start_us,
         depth_latency_us,
+        depth_jitter_us,
     } = timing;
+    let mut transport = DepthTransport::new(depth_latency_us, depth_jitter_us);
     let mut reader = recording.events()?;
     let schedule = recording.meta.trigger;
     let mut timeline = TriggerTimeline::new(schedule.timeline_config());
     let mut pending: Vec<CdEvent> = Vec::with_capacity(1 << 16);
     let mut estimates = Vec::with_capacity(tracker.objects().len());
     let mut stats = OfflineStats::default();
-    // Frames exposed but not yet delivered: (exposure, frame number), oldest first.
-    let mut in_transit: VecDeque<(i64, u64)> = VecDeque::with_capacity(16);
+    // Frames exposed but not yet delivered: (exposure, arrival, frame number), oldest first.
+    let mut in_transit: VecDeque<(i64, i64, u64)> = VecDeque::with_capacity(16);
     let mut feed = |tick: Tick,
                     pending: &mut Vec<CdEvent>,
                     tracker: &mut dyn PoseTracker,
@@ -108,13 +114,13 @@ pub fn track_recording_timed(
         }
         if let Some(n) = tick.depth_frame {
             if recording.depth_frames.contains(&n) {
-                in_transit.push_back((tick.t_us, n));
+                in_transit.push_back((tick.t_us, transport.due_us(tick.t_us), n));
             } else {
                 stats.depth_frames_missing += 1;
             }
         }
-        while let Some(&(exposed_us, n)) = in_transit.front()
-            && tick.t_us >= exposed_us.saturating_add(depth_latency_us)
+        while let Some(&(exposed_us, due_us, n)) = in_transit.front()
+            && tick.t_us >= due_us
         {
             in_transit.pop_front();
             let mut frame = recording.depth_frame(n)?;
@@ -155,8 +161,8 @@ pub fn track_recording_timed(
         }
     }
     // Frames that arrive after the last tick, while the stream goes on (as the runtime's replay delivers them).
-    while let Some(&(exposed_us, n)) = in_transit.front()
-        && latest_us >= exposed_us.saturating_add(depth_latency_us)
+    while let Some(&(exposed_us, due_us, n)) = in_transit.front()
+        && latest_us >= due_us
     {
         in_transit.pop_front();
         let mut frame = recording.depth_frame(n)?;

@@ -12,6 +12,7 @@ use tracker::eval::bench::{
 };
 use tracker::eval::format_pose_csv;
 use tracker::eval::plot::line_plot;
+use tracker::track::DepthTransport;
 
 /// Run methods over every sequence of a suite with only the first pose given (no re-initialisation), evaluate
 /// them, and write DIR/results.md, DIR/results.json, DIR/plots/<sequence>.png and the poses as
@@ -51,6 +52,10 @@ pub struct BenchArgs {
     /// `max_depth_age_ms` old.
     #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = parse_latency_ms)]
     pub depth_latency_ms: f64,
+    /// Add up to this much to each frame's latency, drawn per frame from its exposure time (the same in every
+    /// run), frames kept in order: a live camera's latency varies from frame to frame.
+    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = parse_latency_ms)]
+    pub depth_latency_jitter_ms: f64,
 }
 
 /// A depth latency in milliseconds: a finite number from 0 to 1000.
@@ -167,8 +172,11 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     for spec in &specs {
-        let latency_us = (args.depth_latency_ms * 1e3).round() as i64;
-        methods.push(method_from_spec_timed(spec, &base, latency_us).map_err(anyhow::Error::msg)?);
+        let transport = DepthTransport::new(
+            (args.depth_latency_ms * 1e3).round() as i64,
+            (args.depth_latency_jitter_ms * 1e3).round() as i64,
+        );
+        methods.push(method_from_spec_timed(spec, &base, transport).map_err(anyhow::Error::msg)?);
     }
     let given = Path::new(&args.suite);
     let (suite_name, dir) = if given.is_dir() {
@@ -215,10 +223,18 @@ pub fn run(args: &BenchArgs) -> Result<()> {
                  results.json).\n"
             .into(),
     });
-    if args.depth_latency_ms > 0.0 {
+    if args.depth_latency_ms > 0.0 || args.depth_latency_jitter_ms > 0.0 {
         md.push_str(&format!(
-            "\nDepth frames reached the tracker methods {} ms after their exposure (`--depth-latency-ms`).\n",
-            args.depth_latency_ms
+            "\nDepth frames reached the tracker methods {} ms after their exposure (`--depth-latency-ms`){}.\n",
+            args.depth_latency_ms,
+            if args.depth_latency_jitter_ms > 0.0 {
+                format!(
+                    ", plus up to {} ms drawn per frame (`--depth-latency-jitter-ms`)",
+                    args.depth_latency_jitter_ms
+                )
+            } else {
+                String::new()
+            }
         ));
     }
     let json = results_json(&suite_name, &results, args.auc.limit());

@@ -51,6 +51,10 @@ pub struct DemoArgs {
     /// (`[source] depth_latency_ms`; default 0: with its own tick).
     #[arg(long, value_name = "MS", value_parser = crate::bench::parse_latency_ms)]
     pub depth_latency_ms: Option<f64>,
+    /// Add up to this much to each depth frame's latency, drawn per frame (`[source] depth_latency_jitter_ms`;
+    /// default 0).
+    #[arg(long, value_name = "MS", value_parser = crate::bench::parse_latency_ms)]
+    pub depth_latency_jitter_ms: Option<f64>,
 }
 
 /// Writes an image strip of six overlays (reconstructed intensity `I_t` with the model outline at the published
@@ -99,6 +103,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     }
     if let Some(ms) = args.depth_latency_ms {
         config.source.depth_latency_ms = ms;
+    }
+    if let Some(ms) = args.depth_latency_jitter_ms {
+        config.source.depth_latency_jitter_ms = ms;
     }
     if let Some(p) = &args.latency_log {
         config.output.latency_log = Some(session::from_working_dir(p)?);

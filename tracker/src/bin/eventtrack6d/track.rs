@@ -61,6 +61,10 @@ pub struct TrackArgs {
     /// `max_depth_age_ms` old.
     #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = crate::bench::parse_latency_ms)]
     pub depth_latency_ms: f64,
+    /// Add up to this much to each frame's latency, drawn per frame from its exposure time (the same in every
+    /// run), frames kept in order: a live camera's latency varies from frame to frame.
+    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = crate::bench::parse_latency_ms)]
+    pub depth_latency_jitter_ms: f64,
 }
 
 /// Tracker parameters from a `--params` TOML file (the `[tracker]` table's keys at top level), validated; the
@@ -173,6 +177,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     let timing = OfflineTiming {
         start_us: start,
         depth_latency_us: (args.depth_latency_ms * 1e3).round() as i64,
+        depth_jitter_us: (args.depth_latency_jitter_ms * 1e3).round() as i64,
     };
     let stats = track_recording_timed(
         &rec,

@@ -164,6 +164,10 @@ pub struct SourceConfig {
     /// since its exposure again when it arrives (`retrack_late_depth`, `max_depth_age_ms`).
     #[serde(default)]
     pub depth_latency_ms: f64,
+    /// Replay only: up to this much more latency for each frame, ms, drawn per frame from its exposure time (the
+    /// same as `track --depth-latency-jitter-ms` draws); frames stay in order.
+    #[serde(default)]
+    pub depth_latency_jitter_ms: f64,
 }
 
 /// `[demo]`: the generated demo sequence.

@@ -105,6 +105,16 @@ fn out_of_range_values_are_named() {
     }
     let ok = parse("[source]\nkind = \"demo\"\ndepth_latency_ms = 40.0\n").unwrap();
     assert_eq!(ok.source.depth_latency_ms, 40.0);
+    for bad in ["-1.0", "1000.5", "nan"] {
+        let e = parse(&format!(
+            "[source]\nkind = \"demo\"\ndepth_latency_jitter_ms = {bad}\n"
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("`source.depth_latency_jitter_ms`"), "{bad}: {e}");
+    }
+    let ok = parse("[source]\nkind = \"demo\"\ndepth_latency_jitter_ms = 20.0\n").unwrap();
+    assert_eq!(ok.source.depth_latency_jitter_ms, 20.0);
 }
 
 #[test]

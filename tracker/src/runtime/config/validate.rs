@@ -11,19 +11,24 @@ impl Config {
             key: key.into(),
             message,
         };
-        let latency = self.source.depth_latency_ms;
-        if !(latency.is_finite() && (0.0..=1000.0).contains(&latency)) {
-            return Err(bad(
-                "source.depth_latency_ms",
-                format!("{latency} is out of range: 0 to 1000 ms"),
-            ));
-        }
-        if latency > 0.0 && self.source.kind == SourceKind::Live {
-            return Err(bad(
-                "source.depth_latency_ms",
-                "simulates a depth camera's transport latency on replay; a live source has its own (set it to 0)"
-                    .into(),
-            ));
+        for (key, latency) in [
+            ("source.depth_latency_ms", self.source.depth_latency_ms),
+            (
+                "source.depth_latency_jitter_ms",
+                self.source.depth_latency_jitter_ms,
+            ),
+        ] {
+            if !(latency.is_finite() && (0.0..=1000.0).contains(&latency)) {
+                return Err(bad(key, format!("{latency} is out of range: 0 to 1000 ms")));
+            }
+            if latency > 0.0 && self.source.kind == SourceKind::Live {
+                return Err(bad(
+                    key,
+                    "simulates a depth camera's transport latency on replay; a live source has its own (set it \
+                     to 0)"
+                        .into(),
+                ));
+            }
         }
         match self.source.kind {
             SourceKind::Demo => {
