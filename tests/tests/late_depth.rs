@@ -272,8 +272,9 @@ fn a_late_frame_is_tracked_again_when_it_arrives_not_at_the_next_tick() {
 }
 
 /// Hands every depth frame over deferred ([`PoseTracker::push_depth_deferred`]), as the runtime does with one
-/// that arrives just before a tick.
-struct DeferringDriver(EventTrack6d);
+/// that arrives just before a tick, or with `carry_only` to be carried only
+/// ([`PoseTracker::push_depth_carried`]), as it does when its thread has fallen behind.
+struct DeferringDriver(EventTrack6d, bool);
 
 impl PoseTracker for DeferringDriver {
     fn objects(&self) -> &[String] {
@@ -283,7 +284,11 @@ impl PoseTracker for DeferringDriver {
         self.0.push_events(events);
     }
     fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
-        self.0.push_depth_deferred(t_us, frame);
+        if self.1 {
+            self.0.push_depth_carried(t_us, frame);
+        } else {
+            self.0.push_depth_deferred(t_us, frame);
+        }
     }
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
         self.0.tick(tick, out);
@@ -308,7 +313,7 @@ fn a_deferred_frame_is_carried_at_its_tick_and_tracked_again_after_it() {
     let rec = mug_recording(&dir.path().join("mug"), 0.5);
     let (at_arrival, _, stats) = track(&rec, TrackerConfig::default(), 20_000);
     let (tracker, first_us) = mug_tracker(&rec, TrackerConfig::default());
-    let mut deferring = DeferringDriver(tracker);
+    let mut deferring = DeferringDriver(tracker, false);
     let mut deferred = Vec::new();
     let mut arrivals = Vec::new();
     let timing = OfflineTiming {
@@ -357,6 +362,44 @@ fn a_deferred_frame_is_carried_at_its_tick_and_tracked_again_after_it() {
         "{differing} of {} arrival ticks differ",
         arrivals.len()
     );
+}
+
+/// A frame handed over to be carried only is carried at its tick and never tracked again: the poses are the
+/// carrying tracker's (`retrack_late_depth = false`) bit for bit, though states are saved and events logged.
+#[test]
+fn a_frame_carried_only_gives_the_carrying_poses() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = mug_recording(&dir.path().join("mug"), 0.5);
+    let carrying = TrackerConfig {
+        retrack_late_depth: false,
+        ..TrackerConfig::default()
+    };
+    let (carried, _, stats) = track(&rec, carrying, 20_000);
+    let (tracker, first_us) = mug_tracker(&rec, TrackerConfig::default());
+    let mut driver = DeferringDriver(tracker, true);
+    let mut poses = Vec::new();
+    let timing = OfflineTiming {
+        start_us: first_us,
+        depth_latency_us: 20_000,
+        depth_jitter_us: 0,
+    };
+    track_recording_timed(
+        &rec,
+        &mut driver,
+        timing,
+        |_, e, _| poses.extend_from_slice(e),
+        |_| {},
+    )
+    .expect("replay");
+    let c = driver.0.counters();
+    assert!(stats.depth_frames >= 12, "{stats:?}");
+    assert_eq!(c.late_frames_retracked, 0, "{c:?}");
+    assert_eq!(c.late_frames_not_retracked, stats.depth_frames, "{c:?}");
+    assert_eq!(c.depth_frames_late, stats.depth_frames, "{c:?}");
+    assert_eq!(poses.len(), carried.len());
+    for (p, q) in poses.iter().zip(&carried) {
+        assert_eq!((p.t_us, p.pose), (q.t_us, q.pose));
+    }
 }
 
 /// What a late frame corrects at its tick, it corrects since its exposure: the history `pose_at` answers from is

@@ -14,6 +14,7 @@ pub struct DepthArrival {
     /// Wall-clock work per tick tracked again, microseconds (a running mean of the latest frames).
     per_tick_us: Option<f64>,
     deferred: u64,
+    shed: u64,
 }
 
 impl DepthArrival {
@@ -25,6 +26,7 @@ impl DepthArrival {
             period_us: period_us.max(1.0),
             per_tick_us: None,
             deferred: 0,
+            shed: 0,
         }
     }
 
@@ -56,6 +58,15 @@ impl DepthArrival {
         per_tick * ticks > left_us
     }
 
+    /// Whether a frame exposed at `t_us` should only be carried, not tracked again: it is late (its tick, at or
+    /// before `last_tick_us`, has run) and the thread has fallen behind (the latest tick waited `waited` after its
+    /// trigger edge was decoded, more than half a tick period), so tracking again would only add to the backlog.
+    pub fn should_shed(&self, t_us: i64, last_tick_us: Option<i64>, waited: Duration) -> bool {
+        self.enabled
+            && last_tick_us.is_some_and(|tick| self.ticks_again(t_us, tick).is_some())
+            && waited.as_secs_f64() * 1e6 > self.period_us / 2.0
+    }
+
     /// Records that working on a frame exposed at `t_us`, up to the tick at `last_tick_us`, took `work`.
     pub fn record(&mut self, t_us: i64, last_tick_us: Option<i64>, work: Duration) {
         let Some(ticks) = last_tick_us.and_then(|tick| self.ticks_again(t_us, tick)) else {
@@ -71,6 +82,16 @@ impl DepthArrival {
     /// Counts a frame handed over deferred.
     pub fn count_deferred(&mut self) {
         self.deferred += 1;
+    }
+
+    /// Counts a frame handed over to be carried only.
+    pub fn count_shed(&mut self) {
+        self.shed += 1;
+    }
+
+    /// Frames handed over to be carried only so far.
+    pub fn shed(&self) -> u64 {
+        self.shed
     }
 
     /// Frames handed over deferred so far.
@@ -114,6 +135,9 @@ mod tests {
             self.handed.lock().unwrap().push("deferred");
             self.pending = true;
         }
+        fn push_depth_carried(&mut self, _: i64, _: &mut DepthFrame) {
+            self.handed.lock().unwrap().push("carried only");
+        }
         fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
             out.push(PoseEstimate {
                 object: 0,
@@ -133,9 +157,11 @@ mod tests {
         }
     }
 
-    /// Frames 40 ms late, each arriving 1.7 ms before a tick, through the tracker thread; returns how each was
-    /// handed over and the health after.
-    fn run(defer: bool) -> (Vec<&'static str>, Health) {
+    /// Frames 40 ms late, each arriving 1.7 ms before a tick, through the tracker thread (with an age limit of
+    /// 200 ms when deferring, 30 ms when not). Everything is queued at once, so the edges' decode instants are
+    /// set apart from the queueing: 20 ms before with `behind` (a thread that has fallen behind), else far
+    /// ahead (no tick counts as having waited). Returns how each frame was handed over and the health after.
+    fn run(defer: bool, behind: bool) -> (Vec<&'static str>, Health) {
         let cfg = TimelineConfig::default();
         let queue = Arc::new(IngestQueue::new(64, 16));
         let health = Arc::new(Mutex::new(Health::new(&["mug".into()], &[])));
@@ -152,7 +178,8 @@ mod tests {
             queue.clone(),
             health.clone(),
         )
-        .with_depth_deferral(defer);
+        .with_depth_deferral(defer)
+        .with_depth_age_limit(Some(if defer { 200.0 } else { 30.0 }));
         let thread = std::thread::spawn(move || worker.run());
         let edges = ideal_edges(&cfg, 1_000, 24);
         let exposures: Vec<i64> = edges.chunks(2).step_by(4).map(|p| p[0].t_us).collect();
@@ -177,10 +204,13 @@ mod tests {
                 });
             }
             for &edge in pulse {
-                queue.push(Ingest::Trigger {
-                    edge,
-                    decoded_at: Instant::now(),
-                });
+                let now = Instant::now();
+                let decoded_at = if behind {
+                    now.checked_sub(Duration::from_millis(20)).unwrap_or(now)
+                } else {
+                    now + Duration::from_secs(60)
+                };
+                queue.push(Ingest::Trigger { edge, decoded_at });
             }
         }
         queue.push(Ingest::End);
@@ -192,7 +222,7 @@ mod tests {
 
     #[test]
     fn the_tracker_thread_defers_a_frame_whose_work_would_delay_the_next_tick() {
-        let (handed, health) = run(true);
+        let (handed, health) = run(true, false);
         // 6 exposures, 5 of them due before the last tick; the first is measured at arrival, the rest deferred.
         assert_eq!(
             handed,
@@ -205,10 +235,29 @@ mod tests {
         assert!(health.depth_arrival.quantile_us(0.5).unwrap() >= 5_000.0);
         assert_eq!(health.depth_frame_age.count(), 5);
         assert_eq!(health.depth_frame_age.max_us(), Some(40_000.0));
+        assert_eq!(health.depth_frames_too_old, 0);
 
-        let (handed, health) = run(false);
+        let (handed, health) = run(false, false);
         assert_eq!(handed, ["at arrival"; 5]);
         assert_eq!(health.depth_frames_deferred, 0);
+        // 40 ms old against a 30 ms limit: each counted (and the first reported on stderr).
+        assert_eq!(health.depth_frames_too_old, 5);
+    }
+
+    /// A thread that has fallen behind (its ticks wait 20 ms after their edges were decoded) only carries the
+    /// late frames: tracking again would add to the backlog.
+    #[test]
+    fn a_thread_that_has_fallen_behind_carries_late_frames_only() {
+        let (handed, health) = run(true, true);
+        assert_eq!(handed, ["carried only"; 5]);
+        assert_eq!(health.depth_frames_shed, 5);
+        assert_eq!(health.depth_arrival.count(), 5);
+        assert_eq!(health.depth_frames_deferred, 0);
+        assert_eq!(health.depth_frames, 5);
+        // Off (a fast replay): handed over as usual whatever the wait.
+        let (handed, health) = run(false, true);
+        assert_eq!(handed, ["at arrival"; 5]);
+        assert_eq!(health.depth_frames_shed, 0);
     }
 
     #[test]
@@ -239,5 +288,11 @@ mod tests {
         assert!(!off.should_defer(0, Some(40_000), Some(33_333)));
         a.count_deferred();
         assert_eq!(a.deferred(), 1);
+        // Carried only when late and the latest tick waited more than half a period.
+        assert!(a.should_shed(0, Some(33_333), Duration::from_millis(5)));
+        assert!(!a.should_shed(0, Some(33_333), Duration::from_millis(3)));
+        assert!(!a.should_shed(41_667, Some(33_333), Duration::from_millis(5)));
+        assert!(!a.should_shed(0, None, Duration::from_millis(5)));
+        assert!(!off.should_shed(0, Some(33_333), Duration::from_millis(50)));
     }
 }

@@ -217,6 +217,9 @@ pub struct Health {
     pub depth_frames_deferred: u64,
     /// Depth frames that reached the tracker thread older than the tracker uses (`max_depth_age_ms`).
     pub depth_frames_too_old: u64,
+    /// Late depth frames handed over to be carried only, because the tracker thread had fallen behind
+    /// ([`super::depth_arrival::DepthArrival::should_shed`]).
+    pub depth_frames_shed: u64,
 }
 
 impl Health {
@@ -257,6 +260,7 @@ impl Health {
             depth_arrival: LatencyHistogram::new(),
             depth_frames_deferred: 0,
             depth_frames_too_old: 0,
+            depth_frames_shed: 0,
         }
     }
 
@@ -338,6 +342,7 @@ impl Health {
                 "depth_frame_age_us": latency_json(&self.depth_frame_age.summary()),
                 "depth_frames_deferred": self.depth_frames_deferred,
                 "depth_frames_too_old": self.depth_frames_too_old,
+                "depth_frames_shed": self.depth_frames_shed,
                 "queue_max_batches": self.queue.max_depth,
             },
             "sinks": sinks,

@@ -47,6 +47,8 @@ pub struct Summary {
     pub depth_frames_deferred: u64,
     /// Depth frames that arrived older than the tracker uses (`max_depth_age_ms`).
     pub depth_frames_too_old: u64,
+    /// Late depth frames carried only, because the tracker thread had fallen behind.
+    pub depth_frames_shed: u64,
     /// Per sink.
     pub sinks: Vec<SinkSummary>,
     /// Queue counters (dropped events).
@@ -152,7 +154,7 @@ impl std::fmt::Display for Summary {
             let (a, w) = (&self.depth_frame_age, &self.depth_arrival);
             writeln!(
                 f,
-                "depth arrival:   {} frames, age p50 {} p99 {} max {} ms (exposure -> tracker thread, camera clock); tracker work then p50 {} p99 {} max {} ms; {} deferred (carried at the next tick, tracked again after its poses); {} older than max_depth_age_ms",
+                "depth arrival:   {} frames, age p50 {} p99 {} max {} ms (exposure -> tracker thread, camera clock); tracker work then p50 {} p99 {} max {} ms; {} deferred (carried at the next tick, tracked again after its poses); {} carried only (the tracker thread was behind); {} older than max_depth_age_ms",
                 w.samples,
                 ms(a.p50_us),
                 ms(a.p99_us),
@@ -161,6 +163,7 @@ impl std::fmt::Display for Summary {
                 ms(w.p99_us),
                 ms(w.max_us),
                 self.depth_frames_deferred,
+                self.depth_frames_shed,
                 self.depth_frames_too_old
             )?;
         }

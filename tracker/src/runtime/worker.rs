@@ -109,6 +109,8 @@ pub struct Worker {
     arrival: DepthArrival,
     /// Exposure of the frame handed over deferred since the latest tick.
     deferred_depth_us: Option<i64>,
+    /// How long the latest tick waited after its trigger edge was decoded.
+    last_waited: Duration,
     /// Oldest depth frame the tracker uses, microseconds after its exposure (`max_depth_age_ms`), if it says.
     depth_age_limit_us: Option<i64>,
     /// Whether a frame older than that was reported.
@@ -144,6 +146,7 @@ impl Worker {
             last_tick_us: None,
             arrival: DepthArrival::new(false, timeline.period_us()),
             deferred_depth_us: None,
+            last_waited: Duration::ZERO,
             depth_age_limit_us: None,
             reported_old_depth: false,
         }
@@ -232,6 +235,17 @@ impl Worker {
                     }
                     let start = Instant::now();
                     if self
+                        .arrival
+                        .should_shed(t_us, self.last_tick_us, self.last_waited)
+                    {
+                        self.tracker.push_depth_carried(t_us, &mut frame);
+                        let work = start.elapsed();
+                        self.arrival.count_shed();
+                        let mut h = self.health();
+                        h.depth_frames += 1;
+                        h.depth_frames_shed = self.arrival.shed();
+                        h.depth_arrival.record(work);
+                    } else if self
                         .arrival
                         .should_defer(t_us, self.stream_us, self.last_tick_us)
                     {
@@ -366,6 +380,7 @@ impl Worker {
         }
         drop(h);
         self.last_tick_us = Some(tick.t_us);
+        self.last_waited = tick_start.saturating_duration_since(decoded_at);
         // The poses are out: start the next tick's work (its renders, and tracking again for a frame deferred)
         // in the time until it arrives.
         let prepare_start = Instant::now();

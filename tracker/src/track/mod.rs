@@ -57,6 +57,13 @@ pub trait PoseTracker: Send {
     fn push_depth_deferred(&mut self, t_us: i64, frame: &mut DepthFrame) {
         self.push_depth(t_us, frame);
     }
+    /// Like [`Self::push_depth`] for a caller that has fallen behind: the frame is used only the cheap way, and
+    /// nothing it could cost beyond that is done (EventTrack6D: the next tick carries a late frame from its
+    /// exposure and nothing is tracked again; counted in `late_frames_not_retracked`). By default the same as
+    /// `push_depth`.
+    fn push_depth_carried(&mut self, t_us: i64, frame: &mut DepthFrame) {
+        self.push_depth(t_us, frame);
+    }
     /// Estimates every object's pose at `tick` and appends one [`PoseEstimate`] per object to `out`.
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>);
     /// Work for the next tick that need not delay this tick's poses (EventTrack6D: start its renders,

@@ -239,7 +239,9 @@ pub struct TrackerConfig {
     pub renderer: crate::render::RendererKind,
     /// In a real-time run (a live rig, or a replay at `pace = "realtime"`), a depth frame that arrives when the
     /// tracker's work at the previous frame would not be done before the next tick is handed over right after
-    /// that tick's poses are out, so the tick does not wait (that tick then lacks the frame). Default true.
+    /// that tick's poses are out, so the tick does not wait (that tick carries the frame from its exposure). When
+    /// the tracker thread has fallen behind (its latest tick waited more than half a tick period), a late frame
+    /// is carried only, not tracked again, so the thread catches up. Default true.
     pub defer_late_depth: bool,
     /// `[tracker.parameters]`: the tracker's parameters, the keys of `track --params` (each method's preset, e.g.
     /// `depth30`'s, applies on top); every key defaults.

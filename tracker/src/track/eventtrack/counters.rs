@@ -18,8 +18,9 @@ pub struct TrackerCounters {
     pub late_frames_retracked: u64,
     /// Ticks tracked again for them (their poses were out already).
     pub ticks_retracked: u64,
-    /// Late depth frames used without tracking again: no state was saved at their exposure, or the events since
-    /// no longer fitted the log (`retrack_max_events`). Such a frame is carried from its exposure instead.
+    /// Late depth frames used without tracking again: no state was saved at their exposure, the events since
+    /// no longer fitted the log (`retrack_max_events`), or the runtime's tracker thread had fallen behind
+    /// ([`crate::track::PoseTracker::push_depth_carried`]). Such a frame is carried from its exposure instead.
     pub late_frames_not_retracked: u64,
     /// Late depth frames an object could not use, summed over objects: its pose history did not reach back to
     /// the exposure (it was re-detected or reset since).

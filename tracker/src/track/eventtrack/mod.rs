@@ -359,6 +359,13 @@ impl PoseTracker for EventTrack6d {
         }
     }
 
+    fn push_depth_carried(&mut self, t_us: i64, frame: &mut DepthFrame) {
+        self.take_depth(t_us, frame);
+        if self.retrack.is_some() {
+            self.deferred = Deferred::CarryOnly;
+        }
+    }
+
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
         self.prepared = false;
         self.retrack_before(tick);

@@ -28,6 +28,8 @@ pub(super) enum Deferred {
     BeforeTick,
     /// The tick carried the frame exposed then; tracking again from there waits for `prepare_next_tick`.
     AfterTick(i64),
+    /// The next tick carries it, and it is not tracked again (the caller has fallen behind).
+    CarryOnly,
 }
 
 /// Half a tick period, microseconds: a depth frame belongs to the tick whose time is this close to its exposure.
@@ -191,7 +193,7 @@ impl EventTrack6d {
                 ..c
             });
         retrack.checks.extend(arrival_checks);
-        let defer = self.deferred == Deferred::BeforeTick;
+        let defer = self.deferred;
         self.deferred = Deferred::No;
         if let Some(exposed_us) = self.depth_t_us
             && exposed_us < tick.t_us - SAME_TICK_US
@@ -199,7 +201,13 @@ impl EventTrack6d {
         {
             match self.retrack_start(&retrack, exposed_us) {
                 // This tick carries the frame; tracking again waits until its poses are out.
-                Some(_) if defer => self.deferred = Deferred::AfterTick(exposed_us),
+                Some(_) if defer == Deferred::BeforeTick => {
+                    self.deferred = Deferred::AfterTick(exposed_us);
+                }
+                // Carried at this tick only: counted like a frame that could not be tracked again.
+                Some(_) if defer == Deferred::CarryOnly => {
+                    self.counters.late_frames_not_retracked += 1;
+                }
                 Some(k) => {
                     let mut checks = std::mem::take(&mut retrack.checks);
                     self.track_again(&mut retrack, k, tick.t_us, &mut checks);
