@@ -209,61 +209,9 @@ impl Worker {
                     self.queue.recycle(events);
                     self.health().events += n;
                 }
-                Ingest::Depth { t_us, mut frame } => {
-                    if let Some(age_us) = self.stream_us.map(|now| (now - t_us).max(0)) {
-                        self.health()
-                            .depth_frame_age
-                            .record(Duration::from_micros(age_us.unsigned_abs()));
-                        let too_old = self.depth_age_limit_us.is_some_and(|l| age_us > l);
-                        if too_old {
-                            self.health().depth_frames_too_old += 1;
-                        }
-                        if let Some(limit_us) = self.depth_age_limit_us
-                            && too_old
-                            && !self.reported_old_depth
-                        {
-                            self.reported_old_depth = true;
-                            eprintln!(
-                                "warning: a depth frame reached the tracker {:.1} ms after its exposure, more than \
-                                 max_depth_age_ms = {:.0}: the tracker does not use such frames (counted as unused); \
-                                 raise [tracker.parameters] max_depth_age_ms or reduce the depth camera's latency \
-                                 (further ones are counted)",
-                                age_us as f64 * 1e-3,
-                                limit_us as f64 * 1e-3
-                            );
-                        }
-                    }
-                    let start = Instant::now();
-                    if self
-                        .arrival
-                        .should_shed(t_us, self.last_tick_us, self.last_waited)
-                    {
-                        self.tracker.push_depth_carried(t_us, &mut frame);
-                        let work = start.elapsed();
-                        self.arrival.count_shed();
-                        let mut h = self.health();
-                        h.depth_frames += 1;
-                        h.depth_frames_shed = self.arrival.shed();
-                        h.depth_arrival.record(work);
-                    } else if self
-                        .arrival
-                        .should_defer(t_us, self.stream_us, self.last_tick_us)
-                    {
-                        self.tracker.push_depth_deferred(t_us, &mut frame);
-                        self.arrival.count_deferred();
-                        // Its work is measured after the next tick ([`Self::tick`]).
-                        self.deferred_depth_us = Some(t_us);
-                        let mut h = self.health();
-                        h.depth_frames += 1;
-                        h.depth_frames_deferred = self.arrival.deferred();
-                    } else {
-                        self.tracker.push_depth(t_us, &mut frame);
-                        let work = start.elapsed();
-                        self.arrival.record(t_us, self.last_tick_us, work);
-                        let mut h = self.health();
-                        h.depth_frames += 1;
-                        h.depth_arrival.record(work);
-                    }
+                Ingest::Depth { t_us, frame } => {
+                    self.check_depth_age(t_us);
+                    self.hand_over_depth(t_us, frame);
                 }
                 Ingest::Trigger { edge, decoded_at } => {
                     self.stream_us = Some(self.stream_us.map_or(edge.t_us, |t| t.max(edge.t_us)));
@@ -320,6 +268,68 @@ impl Worker {
         }
         for (sh, s) in h.sinks.iter_mut().zip(&self.sinks) {
             sh.counters = s.counters();
+        }
+    }
+
+    /// Records how old the depth frame exposed at `t_us` is on arrival (the latest stream time less its
+    /// exposure), and counts and (once) reports a frame older than the tracker uses.
+    fn check_depth_age(&mut self, t_us: i64) {
+        let Some(age_us) = self.stream_us.map(|now| (now - t_us).max(0)) else {
+            return;
+        };
+        let too_old = self.depth_age_limit_us.filter(|&limit| age_us > limit);
+        let mut h = self.health();
+        h.depth_frame_age
+            .record(Duration::from_micros(age_us.unsigned_abs()));
+        h.depth_frames_too_old += u64::from(too_old.is_some());
+        drop(h);
+        if let Some(limit_us) = too_old
+            && !std::mem::replace(&mut self.reported_old_depth, true)
+        {
+            eprintln!(
+                "warning: a depth frame reached the tracker {:.1} ms after its exposure, more than \
+                 max_depth_age_ms = {:.0}: the tracker does not use such frames (counted as unused); \
+                 raise [tracker.parameters] max_depth_age_ms or reduce the depth camera's latency \
+                 (further ones are counted)",
+                age_us as f64 * 1e-3,
+                limit_us as f64 * 1e-3
+            );
+        }
+    }
+
+    /// Hands the depth frame exposed at `t_us` to the tracker: carried only while the thread is behind, deferred
+    /// when its work would delay the next tick, else at once ([`DepthArrival`]); records the work it took.
+    fn hand_over_depth(&mut self, t_us: i64, mut frame: Box<drivers::recording::DepthFrame>) {
+        let start = Instant::now();
+        let shed = self
+            .arrival
+            .should_shed(t_us, self.last_tick_us, self.last_waited);
+        let defer = !shed
+            && self
+                .arrival
+                .should_defer(t_us, self.stream_us, self.last_tick_us);
+        let work = if shed {
+            self.tracker.push_depth_carried(t_us, &mut frame);
+            self.arrival.count_shed();
+            Some(start.elapsed())
+        } else if defer {
+            self.tracker.push_depth_deferred(t_us, &mut frame);
+            self.arrival.count_deferred();
+            // Its work is measured after the next tick ([`Self::tick`]).
+            self.deferred_depth_us = Some(t_us);
+            None
+        } else {
+            self.tracker.push_depth(t_us, &mut frame);
+            let work = start.elapsed();
+            self.arrival.record(t_us, self.last_tick_us, work);
+            Some(work)
+        };
+        let mut h = self.health();
+        h.depth_frames += 1;
+        h.depth_frames_shed = self.arrival.shed();
+        h.depth_frames_deferred = self.arrival.deferred();
+        if let Some(work) = work {
+            h.depth_arrival.record(work);
         }
     }
 
