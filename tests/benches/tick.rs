@@ -3,7 +3,8 @@
 //! frame + refinement), with the CPU renderer on the tracker's thread alone (`cpu`), the CPU renderer rendering
 //! ahead on a second thread as by default (`cpu_ahead`), and the wgpu renderer. The `render_in_*` benches time only the
 //! renderer's calls inside the same ticks, so a tick's cost splits into rendering and everything else. The
-//! `paced/*_at_120hz` benches run the same ticks one tick period apart, as a live stream does.
+//! `paced/*_at_120hz` benches run the same ticks one tick period apart, as a live stream does. The `cpu_of_tick_*`
+//! benches report the CPU time of every thread of the process per back-to-back tick instead of wall time.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use eventtrack6d_tests::render_hook::HookedRenderer;
@@ -118,6 +119,37 @@ fn bench_paced(
     group.finish();
 }
 
+/// CPU time of the whole process (every thread, user and system), nanoseconds.
+fn process_cpu_ns() -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec; CLOCK_PROCESS_CPUTIME_ID is supported on Linux.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    assert_eq!(rc, 0, "clock_gettime(CLOCK_PROCESS_CPUTIME_ID) failed");
+    u64::try_from(ts.tv_sec).unwrap_or(0) * 1_000_000_000 + u64::try_from(ts.tv_nsec).unwrap_or(0)
+}
+
+/// The CPU time the same back-to-back ticks as [`bench_tracker`] cost, summed over every thread of the process
+/// (the tracker's, and the renderer's helpers: the render-ahead thread, or lavapipe's rasteriser and queue
+/// threads). On a machine with `n` cores a back-to-back tick cannot take less wall time than this divided by `n`.
+fn bench_cpu_of_tick(c: &mut Criterion, label: &str, s: &mut SteadyTracker) {
+    let mut out = Vec::with_capacity(4);
+    let tick = s.last_tick;
+    c.bench_function(&format!("cpu_of_tick_{label}_160"), |b| {
+        b.iter_custom(|iters| {
+            let start = process_cpu_ns();
+            for _ in 0..iters {
+                out.clear();
+                s.tracker.tick(&tick, &mut out);
+                s.tracker.prepare_next_tick();
+            }
+            Duration::from_nanos(process_cpu_ns().saturating_sub(start))
+        })
+    });
+}
+
 /// Times only the renderer's share of the same ticks as [`bench_tracker`]: each sample is the summed wall time of
 /// the render calls made by `iters` ticks.
 fn bench_render_share(c: &mut Criterion, label: &str, mut s: SteadyTracker, spent_ns: &AtomicU64) {
@@ -178,6 +210,7 @@ fn ticks(c: &mut Criterion) {
     let cpu: Box<dyn Renderer + Send> = Box::new(CpuRenderer::new());
     let mut s = steady_tracker(rec.clone(), one_thread.clone(), cpu);
     bench_tracker(c, "cpu", &mut s);
+    bench_cpu_of_tick(c, "cpu", &mut s);
     bench_paced(c, "cpu", &mut s, None);
     let (mut s, spent) = timed_tracker(&rec, Box::new(CpuRenderer::new()), one_thread);
     bench_paced(c, "cpu", &mut s, Some(&spent));
@@ -189,6 +222,7 @@ fn ticks(c: &mut Criterion) {
         Box::new(CpuRenderer::new()),
     );
     bench_tracker(c, "cpu_ahead", &mut s);
+    bench_cpu_of_tick(c, "cpu_ahead", &mut s);
     bench_paced(c, "cpu_ahead", &mut s, None);
     let counts = s.tracker.counters();
     eprintln!(
@@ -203,6 +237,7 @@ fn ticks(c: &mut Criterion) {
         Ok(gpu) => {
             let mut s = steady_tracker(rec.clone(), TrackerConfig::default(), gpu);
             bench_tracker(c, "gpu", &mut s);
+            bench_cpu_of_tick(c, "gpu", &mut s);
             bench_paced(c, "gpu", &mut s, None);
             let counts = s.tracker.counters();
             eprintln!(
