@@ -57,6 +57,22 @@ fn overlay_draws_intensity_and_the_outline_in_the_tracking_colour() {
 }
 
 #[test]
+fn overlay_writer_names_a_directory_it_cannot_create() {
+    let cam = common::vga();
+    let mesh = Arc::new(common::cube(0.1));
+    let file = std::env::temp_dir().join(format!("overlay-file-{}", std::process::id()));
+    std::fs::write(&file, b"not a directory").expect("temp file");
+    let renderer = OverlayRenderer::new(cam, &[mesh]).expect("renderer");
+    let err = OverlayWriter::new(&file.join("frames"), 1, renderer)
+        .err()
+        .expect("a directory under a file cannot be created");
+    let _ = std::fs::remove_file(&file);
+    let msg = err.to_string();
+    assert!(msg.contains("overlay directory"), "{msg}");
+    assert!(msg.contains(&file.display().to_string()), "{msg}");
+}
+
+#[test]
 fn overlay_writer_refuses_a_surface_without_intensity() {
     let cam = common::vga();
     let mesh = Arc::new(common::cube(0.1));

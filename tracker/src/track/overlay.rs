@@ -121,9 +121,15 @@ pub struct OverlayWriter {
 }
 
 impl OverlayWriter {
-    /// A writer into `dir` (created if missing) drawing one tick in `every` (at least 1).
+    /// A writer into `dir` (created if missing) drawing one tick in `every` (at least 1). The error names the
+    /// directory.
     pub fn new(dir: &Path, every: u64, renderer: OverlayRenderer) -> std::io::Result<Self> {
-        std::fs::create_dir_all(dir)?;
+        std::fs::create_dir_all(dir).map_err(|e| {
+            std::io::Error::new(
+                e.kind(),
+                format!("cannot create the overlay directory {}: {e}", dir.display()),
+            )
+        })?;
         Ok(Self {
             dir: dir.to_path_buf(),
             every: every.max(1),
