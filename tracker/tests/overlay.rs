@@ -63,9 +63,9 @@ fn overlay_writer_names_a_directory_it_cannot_create() {
     let file = std::env::temp_dir().join(format!("overlay-file-{}", std::process::id()));
     std::fs::write(&file, b"not a directory").expect("temp file");
     let renderer = OverlayRenderer::new(cam, &[mesh]).expect("renderer");
-    let err = OverlayWriter::new(&file.join("frames"), 1, renderer)
-        .err()
-        .expect("a directory under a file cannot be created");
+    let Err(err) = OverlayWriter::new(&file.join("frames"), 1, renderer) else {
+        panic!("a directory under a file cannot be created");
+    };
     let _ = std::fs::remove_file(&file);
     let msg = err.to_string();
     assert!(msg.contains("overlay directory"), "{msg}");
