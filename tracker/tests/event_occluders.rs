@@ -64,6 +64,7 @@ fn kept_bins(other_z: f64, occluder_z: f32) -> (usize, usize) {
         10_000,
         2_000,
         400,
+        None,
     );
     let shown = target.mask().iter().filter(|&&l| l == 2).count();
     (edges.stats().bins, shown)

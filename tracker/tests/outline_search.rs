@@ -68,6 +68,7 @@ fn searched_shift(term: &EventTerm, motion_dir: Option<[f64; 2]>) -> Option<[f64
         10_000,
         2_000,
         400,
+        None,
     );
     edges.search_shift(term, &view, &hypothesis, &cam, 20.0, motion_dir)
 }

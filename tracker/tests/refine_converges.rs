@@ -210,6 +210,7 @@ fn refine_events(
             10_000,
             2_000,
             400,
+            None,
         );
         edges.associate(term, &view, &pose, &center, &cam, &motion, 0.002);
         let mut ne = NormalEquations::default();
@@ -322,6 +323,7 @@ fn outline_search_finds_a_shift_beyond_the_refinement_range() {
         10_000,
         2_000,
         400,
+        None,
     );
     let expected = 0.025 * cam.fx / 0.5;
     let [du, dv] = edges
@@ -470,6 +472,7 @@ fn contrast_maximisation_recovers_the_velocity_of_a_moving_outline() {
         10_000,
         4_500,
         400,
+        None,
     );
     let center = pose * nalgebra::Point3::origin();
     edges.lift_events(

@@ -12,7 +12,7 @@ mod intensity_term;
 mod model_view;
 
 pub use depth_term::{DepthTerm, DepthTermStats};
-pub use event_term::{EventEdges, EventTerm, EventTermKind, EventTermStats};
+pub use event_term::{BinnedWindow, EventEdges, EventTerm, EventTermKind, EventTermStats};
 pub use intensity_term::{IntensityEdges, IntensityTerm};
 pub use model_view::{ContourPoint, ModelView, SurfacePoint};
 

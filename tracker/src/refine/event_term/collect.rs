@@ -1,14 +1,41 @@
 //! Gathering the events of one ROI for [`EventEdges`]: binning the recent events on the ROI grid, removing
 //! isolated bins and events that belong to a nearer object, and keeping the candidates outside the silhouette.
+//! The binning reads only the events, so the tracker does it before it waits for the ROI render
+//! ([`EventEdges::bin_ahead`]); the rest needs the render's mask and depth.
 
 use super::*;
 
+/// Which events a binning holds: those of `roi` in the window `[t_us - window_us, t_us]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BinnedWindow {
+    /// Tick time, microseconds (camera clock).
+    pub t_us: i64,
+    /// Window length, microseconds.
+    pub window_us: i64,
+    /// The ROI whose grid the events were binned on.
+    pub roi: Roi,
+}
+
 impl EventEdges {
+    /// Bins the events of `surface` in `window` ahead of [`Self::collect`] (which reuses them if its call names the
+    /// same window, and bins again otherwise): the part of the gathering that needs no render.
+    pub fn bin_ahead(&mut self, surface: &EventSurface, window: BinnedWindow) {
+        self.bin(surface, &window.roi, window.t_us, window.window_us);
+        self.prebinned = Some(window);
+    }
+
+    /// Forgets a binning made by [`Self::bin_ahead`] and returns its window, if any: the next
+    /// [`Self::collect`] bins afresh unless given it back.
+    pub fn take_prebinned(&mut self) -> Option<BinnedWindow> {
+        self.prebinned.take()
+    }
+
     /// Bins the events of `surface` newer than `t_us - window_us` inside `roi` (the render's ROI; `mask` and
     /// `depth` are the render's mask and depth on the same grid, `id` the object's label) and keeps the candidates
     /// outside the silhouette. Events on another object's silhouette where it is nearer than `occluder_z` (metres,
     /// typically this object's centre depth) are that occluder's and are dropped; events on an object behind are
-    /// kept, since this object's own leading edge sweeps over it.
+    /// kept, since this object's own leading edge sweeps over it. `prebinned` is the window a
+    /// [`Self::bin_ahead`] binned (from [`Self::take_prebinned`]): if it is this one, its bins are used.
     #[allow(clippy::too_many_arguments)]
     pub fn collect(
         &mut self,
@@ -22,7 +49,23 @@ impl EventEdges {
         t_us: i64,
         window_us: i64,
         max_candidates: usize,
+        prebinned: Option<BinnedWindow>,
     ) {
+        self.prebinned = None;
+        let window = BinnedWindow {
+            t_us,
+            window_us,
+            roi: *roi,
+        };
+        if prebinned != Some(window) {
+            self.bin(surface, roi, t_us, window_us);
+        }
+        self.keep(term, roi, mask, depth, occluder_z, id, max_candidates);
+    }
+
+    /// Bins the events of `surface` in `[t_us - window_us, t_us]` inside `roi` on its grid (`hits`) and counts
+    /// each bin's occupied neighbours in its row (`row_counts`).
+    fn bin(&mut self, surface: &EventSurface, roi: &Roi, t_us: i64, window_us: i64) {
         let (w, h) = (roi.out_width, roi.out_height);
         let n = w as usize * h as usize;
         self.width = w;
@@ -30,15 +73,6 @@ impl EventEdges {
         self.roi = Some(*roi);
         self.hits.clear();
         self.hits.resize(n, 0);
-        self.kept.clear();
-        self.kept.resize(n, false);
-        self.candidates.clear();
-        self.association.clear();
-        self.contour_match.clear();
-        // Sized once for the largest tick, so steady-state ticks do not allocate.
-        self.candidates.reserve(max_candidates + 1);
-        self.association.reserve(max_candidates + 1);
-        self.stats = EventTermStats::default();
         let sx = f64::from(w) / roi.width;
         let sy = f64::from(h) / roi.height;
         let x0 = roi.x.floor().max(0.0) as i64;
@@ -82,11 +116,10 @@ impl EventEdges {
             }
             y += step;
         }
-        // Noise filter: a bin is kept if at least `min_neighbours` bins of its 3x3 neighbourhood (itself
-        // included) hold events; counted separably (row sums of occupancy, then column sums).
-        // Branch-free passes over whole rows, which the compiler vectorises. `row_counts` has a zero row above
-        // and below the grid, so every bin has an above and a below.
-        let (wu, hu) = (w as usize, h as usize);
+        // Noise filter, first half: row sums of occupancy over each bin and its left and right neighbours
+        // (`keep` adds the rows above and below). Branch-free passes over whole rows, which the compiler
+        // vectorises. `row_counts` has a zero row above and below the grid, so every bin has an above and a below.
+        let wu = w as usize;
         self.row_counts.clear();
         self.row_counts.resize(n + 2 * wu, 0);
         if wu > 0 {
@@ -106,6 +139,36 @@ impl EventEdges {
                 }
             }
         }
+    }
+
+    /// The rest of [`Self::collect`] once the events are binned on `roi`'s grid: keeps the bins the noise filter
+    /// and the occluders leave (a bin is kept if at least `min_neighbours` bins of its 3x3 neighbourhood, itself
+    /// included, hold events) and, for the hinge, the candidates outside the silhouette.
+    #[allow(clippy::too_many_arguments)]
+    fn keep(
+        &mut self,
+        term: &EventTerm,
+        roi: &Roi,
+        mask: &[u16],
+        depth: &[f32],
+        occluder_z: f32,
+        id: u16,
+        max_candidates: usize,
+    ) {
+        let (w, h) = (self.width, self.height);
+        let n = w as usize * h as usize;
+        self.kept.clear();
+        self.kept.resize(n, false);
+        self.candidates.clear();
+        self.association.clear();
+        self.contour_match.clear();
+        // Sized once for the largest tick, so steady-state ticks do not allocate.
+        self.candidates.reserve(max_candidates + 1);
+        self.association.reserve(max_candidates + 1);
+        self.stats = EventTermStats::default();
+        let sx = f64::from(w) / roi.width;
+        let sy = f64::from(h) / roi.height;
+        let (wu, hu) = (w as usize, h as usize);
         let min = term.min_neighbours;
         let (mut bins, mut outside) = (0usize, 0usize);
         for j in 0..hu {

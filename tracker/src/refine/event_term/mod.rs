@@ -27,6 +27,7 @@ use super::{ModelView, NormalEquations};
 use crate::geometry::{PinholeCamera, Roi};
 use crate::recon::EventSurface;
 use crate::render::MASK_EMPTY;
+pub use collect::BinnedWindow;
 use nalgebra::{Isometry3, Vector3, Vector6};
 
 /// Nearest grid index of a sample position, `floor(x + 0.5)`, without the libm call `f64::round` makes on targets
@@ -190,6 +191,8 @@ pub struct EventEdges {
     sweep: Vec<f64>,
     roi: Option<Roi>,
     stats: EventTermStats,
+    /// The window [`Self::bin_ahead`] binned, until [`Self::collect`] or [`Self::take_prebinned`].
+    prebinned: Option<BinnedWindow>,
 }
 
 impl EventEdges {

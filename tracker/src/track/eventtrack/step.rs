@@ -42,6 +42,7 @@ impl ObjectStep<'_> {
             }
             // Before the render is taken, so that a render still in flight overlaps it.
             let depth = o.prepare_depth(&self.inputs, self.config);
+            o.prepare_events(&self.inputs, self.config);
             if let Some(roi) = roi
                 && renderer
                     .render_roi(self.scene, self.camera, &roi, &mut o.target)

@@ -3,7 +3,10 @@
 
 use super::depth_check::{seen_agreement, weaker_fit};
 use super::{ObjectTrack, TickInputs, add_prior};
-use crate::refine::{EventTermKind, NormalEquations, StepBounds, apply_step, solve_step};
+use crate::geometry::PinholeCamera;
+use crate::refine::{
+    BinnedWindow, EventTermKind, NormalEquations, StepBounds, apply_step, solve_step,
+};
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::estimate::TrackingState;
 use crate::track::fallback_check::{DepthFallbackCheck, FALLBACK_STARTS, FallbackCandidate};
@@ -85,10 +88,37 @@ impl ObjectTrack {
         depth
     }
 
+    /// The event window this tick's refinement reads, microseconds: about `event_window_px` of the outline's
+    /// predicted image motion, within the configured bounds.
+    fn event_window_us(&self, camera: &PinholeCamera, config: &TrackerConfig) -> i64 {
+        let speed = self.image_speed(camera).max(1.0);
+        let window = ((config.event_window_px / speed) * 1e6) as i64;
+        window.clamp(config.min_event_window_us, config.max_event_window_us)
+    }
+
+    /// Bins the events of this tick's window in the ROI chosen by [`Self::update_roi`], which needs no render:
+    /// the tracker runs it before taking the render, so that a render still in flight overlaps it. The
+    /// refinement reuses the bins.
+    pub fn prepare_events(&mut self, inputs: &TickInputs<'_>, config: &TrackerConfig) {
+        if !config.events {
+            return;
+        }
+        if let Some(roi) = self.roi {
+            let window = BinnedWindow {
+                t_us: inputs.t_us,
+                window_us: self.event_window_us(inputs.camera, config),
+                roi,
+            };
+            self.edges.bin_ahead(inputs.surface, window);
+        }
+    }
+
     /// Refines the predicted pose at this tick from the render already in `self.target` (made at the predicted
     /// poses of all objects) and `depth` from [`Self::prepare_depth`], and updates quality, state and velocity.
     pub fn refine(&mut self, inputs: &TickInputs<'_>, config: &TrackerConfig, depth: TickDepth) {
         self.fallback_check = None;
+        // Events binned ahead of the render at this tick ([`Self::prepare_events`]), if any.
+        let prebinned = self.edges.take_prebinned();
         let Some(roi) = self.roi else {
             if depth.fresh {
                 // The render failed after the frame was registered: its points move with the pose reported (a
@@ -162,9 +192,7 @@ impl ObjectTrack {
         let mut contrast_velocity = None;
         let mut window_s = 0.0;
         if use_events {
-            let speed = self.image_speed(inputs.camera).max(1.0);
-            let window = ((config.event_window_px / speed) * 1e6) as i64;
-            let window = window.clamp(config.min_event_window_us, config.max_event_window_us);
+            let window = self.event_window_us(inputs.camera, config);
             window_s = window as f64 * 1e-6;
             // Another object nearer than this one's centre hides it: its events are its own.
             let occluder_z = self.center_at(&predicted).z as f32;
@@ -179,6 +207,7 @@ impl ObjectTrack {
                 inputs.t_us,
                 window,
                 config.max_event_points,
+                prebinned,
             );
             if contrast_max {
                 let c = self.center_at(&predicted);
