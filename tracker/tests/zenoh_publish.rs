@@ -363,3 +363,115 @@ fn setup_errors_are_typed() {
         .expect("rejected");
     assert!(e.to_string().contains("appears twice"), "{e}");
 }
+
+/// The replies to `selector` from `session`: Ok(payload) for a pose, Err(message) for a refusal; empty while no
+/// queryable matches yet.
+fn ask(session: &zenoh::Session, selector: &str) -> Vec<Result<String, String>> {
+    let replies = session.get(selector).wait().expect("query sent");
+    let mut out = Vec::new();
+    while let Ok(reply) = replies.recv() {
+        out.push(match reply.result() {
+            Ok(sample) => Ok(sample.payload().try_to_string().unwrap().into_owned()),
+            Err(e) => Err(e.payload().try_to_string().unwrap().into_owned()),
+        });
+    }
+    out
+}
+
+#[test]
+fn pose_queries_answer_at_any_time_between_published_ticks() {
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let asker = subscriber_session(&endpoint);
+    let config = ZenohConfig {
+        connect: vec![endpoint],
+        listen: vec![format!("tcp/127.0.0.1:{}", free_port())],
+        ..Default::default()
+    };
+    let objects = vec!["mug".to_string()];
+    let offset_ns = 1_000_000_000;
+    let mut sink = ZenohPosePublisher::new(&config, &objects, offset_ns).expect("sink");
+    let key = sink
+        .pose_query_key_expr(0)
+        .expect("queries are on by default")
+        .to_owned();
+    assert_eq!(key, "eventtrack6d/mug/pose_at");
+    // Poses at ticks 8333 us apart: x grows 1 cm per tick, no rotation.
+    let at = |k: i64| Isometry3::new(Vector3::new(0.01 * k as f64, 0.0, 0.5), Vector3::zeros());
+    for k in 0..4i64 {
+        let tick = Tick {
+            index: k as u64,
+            t_us: 100_000 + 8_333 * k,
+            depth_frame: None,
+            synthesized: false,
+        };
+        let estimates = [PoseEstimate {
+            object: 0,
+            t_us: tick.t_us,
+            pose: at(k),
+            quality: 0.8,
+            state: TrackingState::Tracking,
+        }];
+        sink.publish(&TickPoses {
+            tick: &tick,
+            estimates: &estimates,
+            objects: &objects,
+            decoded_at: Instant::now(),
+        })
+        .expect("publish");
+    }
+    // Half way between the second and third tick, once the queryable is known to the asker.
+    let t_us = 100_000 + 8_333 + 4_166;
+    let deadline = Instant::now() + Duration::from_secs(20);
+    let replies = loop {
+        let replies = ask(&asker, &format!("{key}?t_us={t_us}"));
+        if !replies.is_empty() {
+            break replies;
+        }
+        assert!(Instant::now() < deadline, "no queryable answered on {key}");
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(replies.len(), 1, "{replies:?}");
+    let json: serde_json::Value =
+        serde_json::from_str(replies[0].as_ref().expect("a pose")).unwrap();
+    assert_eq!(json["object"], "mug");
+    assert_eq!(json["t_us"], t_us);
+    assert_eq!(json["stamp_ns"], t_us * 1000 + offset_ns);
+    let x = json["position"][0].as_f64().unwrap();
+    assert!(
+        (x - 0.01 * (1.0 + 4_166.0 / 8_333.0)).abs() < 1e-9,
+        "{json}"
+    );
+    assert_eq!(json["state"], "tracking");
+    // The same time as the pose topic's header stamp.
+    let by_stamp = ask(
+        &asker,
+        &format!("{key}?stamp_ns={}", t_us * 1000 + offset_ns),
+    );
+    assert_eq!(by_stamp, replies);
+    // Refusals say why.
+    for (parameters, says) in [
+        ("", "no time given"),
+        ("t_us=soon", "not a whole number"),
+        ("t_us=1", "before the oldest pose kept"),
+        ("t_us=999999999", "after the latest pose"),
+    ] {
+        let replies = ask(&asker, &format!("{key}?{parameters}"));
+        match replies.as_slice() {
+            [Err(m)] => assert!(m.contains(says), "{parameters}: {m}"),
+            other => panic!("{parameters}: {other:?}"),
+        }
+    }
+    assert_eq!(sink.pose_query_counts(), (2, 4));
+}
+
+#[test]
+fn pose_queries_can_be_turned_off() {
+    let config = ZenohConfig {
+        connect: vec![],
+        listen: vec![format!("tcp/127.0.0.1:{}", free_port())],
+        pose_queries: false,
+        ..Default::default()
+    };
+    let sink = ZenohPosePublisher::new(&config, &["mug".to_string()], 0).expect("sink");
+    assert_eq!(sink.pose_query_key_expr(0), None);
+}

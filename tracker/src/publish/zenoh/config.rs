@@ -53,6 +53,9 @@ pub struct ZenohConfig {
     pub congestion_control: CongestionPolicy,
     /// Express (unbatched) pose samples: lower latency. Default true.
     pub express: bool,
+    /// Answer pose queries on `<prefix>/<object>/pose_at` (`?t_us=` or `?stamp_ns=`): the pose at any time
+    /// within the last 2 s, interpolated between ticks. Default true.
+    pub pose_queries: bool,
 }
 
 impl Default for ZenohConfig {
@@ -69,6 +72,7 @@ impl Default for ZenohConfig {
             node_namespace: "/".into(),
             congestion_control: CongestionPolicy::Drop,
             express: true,
+            pose_queries: true,
         }
     }
 }
@@ -77,6 +81,11 @@ impl ZenohConfig {
     /// The ROS topic of an object's poses: `<prefix>/<object>/pose` (no leading `/`).
     pub fn pose_topic(&self, object: &str) -> String {
         join_topic(&self.topic_prefix, &format!("{object}/pose"))
+    }
+
+    /// The zenoh key of an object's pose queries: `<prefix>/<object>/pose_at`.
+    pub fn pose_query_key_expr(&self, object: &str) -> String {
+        join_topic(&self.topic_prefix, &format!("{object}/pose_at"))
     }
 
     /// The zenoh key of the JSON status: `<prefix>/status`.

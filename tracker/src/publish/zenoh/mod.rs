@@ -6,14 +6,21 @@
 //! runtime inside). A transport failure is counted and returned as [`PublishError`], never a panic.
 
 mod config;
+mod pose_query;
+mod query_parameters;
 #[cfg(test)]
 mod tests;
 
 pub use config::{CongestionPolicy, SessionMode, ZenohConfig, ZenohSetupError};
+pub use pose_query::{
+    MAX_EXTRAPOLATION_US, PoseQueryCounters, PoseQueryError, RECENT_TICKS, RecentPoses,
+    requested_time,
+};
 
 use super::ros2::{self, Attachment, RosNodeIdentity, RosTime};
 use super::{PoseSink, PublishError, SinkCounters, TickPoses};
 use std::hash::{BuildHasher, Hasher};
+use std::sync::{Arc, Mutex};
 use std::time::{SystemTime, UNIX_EPOCH};
 use zenoh::Wait;
 use zenoh::bytes::Encoding;
@@ -51,6 +58,11 @@ pub struct ZenohPosePublisher {
     buffer: Vec<u8>,
     counters: SinkCounters,
     status_counters: SinkCounters,
+    /// The poses published lately, for the pose queries.
+    recent: Arc<Mutex<RecentPoses>>,
+    /// One pose-query queryable per object (none with `pose_queries = false`); undeclared on drop.
+    queryables: Vec<(String, zenoh::query::Queryable<()>)>,
+    query_counters: Arc<PoseQueryCounters>,
 }
 
 impl ZenohPosePublisher {
@@ -151,6 +163,32 @@ impl ZenohPosePublisher {
                 message: e.to_string(),
             })?;
 
+        let recent = Arc::new(Mutex::new(RecentPoses::new(objects.len())));
+        let query_counters = Arc::new(PoseQueryCounters::default());
+        let mut queryables = Vec::new();
+        if config.pose_queries {
+            for (object, name) in objects.iter().enumerate() {
+                let key = config.pose_query_key_expr(name);
+                let context = pose_query::QueryContext {
+                    name: name.clone(),
+                    object,
+                    recent: Arc::clone(&recent),
+                    counters: Arc::clone(&query_counters),
+                    ros_time_offset_ns,
+                };
+                let queryable = session
+                    .declare_queryable(key.clone())
+                    .callback(move |query| context.reply(&query))
+                    .wait()
+                    .map_err(|e| ZenohSetupError::Declare {
+                        what: "queryable",
+                        key: key.clone(),
+                        message: e.to_string(),
+                    })?;
+                queryables.push((key, queryable));
+            }
+        }
+
         let buffer = Vec::with_capacity(ros2::pose_stamped_encoded_len(config.frame_id.len()));
         Ok(Self {
             session,
@@ -164,6 +202,9 @@ impl ZenohPosePublisher {
             buffer,
             counters: SinkCounters::default(),
             status_counters: SinkCounters::default(),
+            recent,
+            queryables,
+            query_counters,
         })
     }
 
@@ -180,6 +221,16 @@ impl ZenohPosePublisher {
     /// The GID that object `object`'s samples carry in their attachment.
     pub fn gid(&self, object: usize) -> Option<[u8; ros2::GID_LEN]> {
         self.objects.get(object).map(|p| p.gid)
+    }
+
+    /// The key expression of object `object`'s pose queries, if they are on.
+    pub fn pose_query_key_expr(&self, object: usize) -> Option<&str> {
+        self.queryables.get(object).map(|(key, _)| key.as_str())
+    }
+
+    /// Pose queries answered and refused so far: (answered, refused).
+    pub fn pose_query_counts(&self) -> (u64, u64) {
+        self.query_counters.get()
     }
 
     /// The key expression of the JSON status.
@@ -273,6 +324,13 @@ impl PoseSink for ZenohPosePublisher {
 
     /// Publishes every estimate on its object's key; a failure is counted and the other objects are still published.
     fn publish(&mut self, poses: &TickPoses<'_>) -> Result<(), PublishError> {
+        if !self.queryables.is_empty()
+            && let Ok(mut recent) = self.recent.lock()
+        {
+            for estimate in poses.estimates {
+                recent.record(estimate);
+            }
+        }
         let mut first_err = None;
         for estimate in poses.estimates {
             match self.publish_one(estimate) {

@@ -13,6 +13,8 @@ fn config_defaults_and_unknown_keys() {
     assert_eq!(c.congestion_control, CongestionPolicy::Drop);
     assert_eq!(c.pose_topic("mug"), "eventtrack6d/mug/pose");
     assert_eq!(c.status_key_expr(), "eventtrack6d/status");
+    assert!(c.pose_queries);
+    assert_eq!(c.pose_query_key_expr("mug"), "eventtrack6d/mug/pose_at");
     let e = serde_json::from_str::<ZenohConfig>(r#"{"conect": []}"#).unwrap_err();
     assert!(e.to_string().contains("unknown field `conect`"), "{e}");
     let c: ZenohConfig =
