@@ -41,10 +41,9 @@ pub fn build_network_sinks(
         let shared = Arc::new(Mutex::new(publisher));
         out.sinks.push(Box::new(SharedSink::new(shared.clone())));
         out.status = Some(Box::new(move |json: &[u8]| {
-            shared
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .put_status(json)
+            let mut publisher = shared.lock().unwrap_or_else(|p| p.into_inner());
+            let doc = with_pose_queries(json, publisher.pose_query_counts());
+            publisher.put_status(&doc)
         }));
     }
     if config.can.enabled {
@@ -72,4 +71,36 @@ pub fn build_network_sinks(
         out.sinks.extend(sinks);
     }
     Ok(out)
+}
+
+/// The status document `json` with the zenoh sink's pose queries so far, `pose_queries: {answered, refused}`,
+/// added at its top level; `json` unchanged if it is not a JSON object.
+fn with_pose_queries(json: &[u8], (answered, refused): (u64, u64)) -> Vec<u8> {
+    match serde_json::from_slice::<serde_json::Value>(json) {
+        Ok(serde_json::Value::Object(mut doc)) => {
+            doc.insert(
+                "pose_queries".into(),
+                serde_json::json!({ "answered": answered, "refused": refused }),
+            );
+            serde_json::to_vec(&doc).unwrap_or_else(|_| json.to_vec())
+        }
+        _ => json.to_vec(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::with_pose_queries;
+
+    #[test]
+    fn the_status_gets_the_pose_query_counts() {
+        let doc = with_pose_queries(br#"{"state":"running","ticks":3}"#, (5, 2));
+        let v: serde_json::Value = serde_json::from_slice(&doc).unwrap();
+        assert_eq!(v["state"], "running");
+        assert_eq!(v["ticks"], 3);
+        assert_eq!(v["pose_queries"]["answered"], 5);
+        assert_eq!(v["pose_queries"]["refused"], 2);
+        assert_eq!(with_pose_queries(b"[1,2]", (1, 1)), b"[1,2]");
+        assert_eq!(with_pose_queries(b"not json", (1, 1)), b"not json");
+    }
 }
