@@ -188,20 +188,17 @@ pub fn answer_json(name: &str, e: &PoseEstimate, ros_time_offset_ns: i64) -> Str
         .t_us
         .checked_mul(1000)
         .and_then(|ns| ns.checked_add(ros_time_offset_ns));
-    let stamp = stamp_ns.map_or("null".to_string(), |s| s.to_string());
-    format!(
-        "{{\"object\":\"{name}\",\"t_us\":{},\"stamp_ns\":{stamp},\"position\":[{},{},{}],\"orientation\":[{},{},{},{}],\"quality\":{},\"state\":\"{}\"}}",
-        e.t_us,
-        t.x,
-        t.y,
-        t.z,
-        q.x,
-        q.y,
-        q.z,
-        q.w,
-        e.quality,
-        e.state.as_str()
-    )
+    // serde_json writes a non-finite number as `null`, so the answer is always valid JSON.
+    serde_json::json!({
+        "object": name,
+        "t_us": e.t_us,
+        "stamp_ns": stamp_ns,
+        "position": [t.x, t.y, t.z],
+        "orientation": [q.x, q.y, q.z, q.w],
+        "quality": e.quality,
+        "state": e.state.as_str(),
+    })
+    .to_string()
 }
 
 /// Queries answered and refused so far (all objects).
@@ -450,5 +447,12 @@ mod tests {
         );
         let v: serde_json::Value = serde_json::from_str(&overflow).expect("valid JSON");
         assert!(v["stamp_ns"].is_null());
+        // A non-finite number would not be JSON: it is written as null.
+        let mut broken = estimate(0, 0, 0.0, TrackingState::Lost);
+        broken.quality = f32::NAN;
+        let v: serde_json::Value =
+            serde_json::from_str(&answer_json("mug", &broken, 0)).expect("valid JSON");
+        assert!(v["quality"].is_null());
+        assert_eq!(v["state"], "lost");
     }
 }
