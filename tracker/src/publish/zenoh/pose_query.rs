@@ -195,7 +195,8 @@ pub fn answer_json(name: &str, e: &PoseEstimate, ros_time_offset_ns: i64) -> Str
         "stamp_ns": stamp_ns,
         "position": [t.x, t.y, t.z],
         "orientation": [q.x, q.y, q.z, q.w],
-        "quality": e.quality,
+        // The f32's shortest decimal form (0.7444, not 0.7444000244140625).
+        "quality": e.quality.to_string().parse::<f64>().unwrap_or(f64::NAN),
         "state": e.state.as_str(),
     })
     .to_string()
@@ -433,6 +434,7 @@ mod tests {
         assert_eq!(v["stamp_ns"], 2_500_000);
         assert_eq!(v["position"][0], 0.25);
         assert_eq!(v["state"], "tracking");
+        assert!(json.contains("\"quality\":0.75"), "{json}");
         let q: Vec<f64> = (0..4)
             .map(|i| v["orientation"][i].as_f64().unwrap())
             .collect();
