@@ -4,7 +4,9 @@
 use std::sync::Arc;
 use tracker::geometry::{PinholeCamera, Roi};
 use tracker::mesh::Mesh;
-use tracker::render::{MeshId, PrefetchCounts, RenderError, RenderTarget, Renderer, Scene};
+use tracker::render::{
+    MeshId, PrefetchCounts, RenderDevice, RenderError, RenderTarget, Renderer, Scene,
+};
 
 /// Renders with `inner`, calling the hook first on every render (ROI renders included; prefetches, which render
 /// nothing the caller sees yet, are passed on without it) and holding what it returns until that render is done, so a guard's `Drop` runs right after it; forks share the hook.
@@ -29,6 +31,10 @@ impl<G: 'static> HookedRenderer<G> {
 impl<G: 'static> Renderer for HookedRenderer<G> {
     fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
         self.inner.add_mesh(mesh)
+    }
+
+    fn device(&self) -> RenderDevice {
+        self.inner.device()
     }
 
     fn render(

@@ -12,7 +12,8 @@ use tracker::geometry::{PinholeCamera, Roi};
 use tracker::mesh::{Material, Mesh, MeshParts, Texture};
 use tracker::render::{
     BackgroundMesh, CpuRenderer, GpuRenderer, MASK_BACKGROUND, MASK_EMPTY, MeshId, PrefetchCounts,
-    RenderError, RenderTarget, Renderer, RendererKind, Scene, SceneObject, create_renderer,
+    RenderDevice, RenderError, RenderTarget, Renderer, RendererKind, Scene, SceneObject,
+    create_renderer,
 };
 
 fn gpu_renderer() -> GpuRenderer {
@@ -220,6 +221,21 @@ fn pose(t: [f64; 3], euler: [f64; 3]) -> Isometry3<f64> {
         Translation3::new(t[0], t[1], t[2]),
         UnitQuaternion::from_euler_angles(euler[0], euler[1], euler[2]),
     )
+}
+
+#[test]
+fn the_device_says_whether_a_gpu_draws() {
+    let gpu = gpu_renderer();
+    let device = gpu.device();
+    let RenderDevice::Vulkan { adapter, on_cpu } = &device else {
+        panic!("the wgpu renderer reports {device:?}");
+    };
+    assert_eq!(adapter, gpu.adapter());
+    // lavapipe (llvmpipe) is Mesa's CPU driver: the operator is told the CPU renderer is faster; a real GPU is not
+    // warned about.
+    let lavapipe = adapter.contains("llvmpipe");
+    assert_eq!(*on_cpu, lavapipe, "{adapter}");
+    assert_eq!(device.warning().is_some(), lavapipe, "{adapter}");
 }
 
 #[test]

@@ -182,6 +182,16 @@ candump_log = "poses.candump.log"
         "state {final_state}"
     );
     assert_eq!(summary.status["ticks"], ticks.len() as u64);
+    // The default renderer, named in the summary and the status.
+    let renderer = "cpu (deterministic rasteriser)";
+    assert_eq!(summary.renderer.as_deref(), Some(renderer));
+    assert_eq!(summary.status["renderer"], renderer);
+    assert!(
+        summary
+            .to_string()
+            .contains(&format!("renderer:        {renderer}")),
+        "{summary}"
+    );
     let rate = summary.tick_rate_hz.unwrap();
     assert!((90.0..=150.0).contains(&rate), "tick rate {rate} Hz");
 

@@ -143,10 +143,64 @@ pub struct PrefetchCounts {
     pub used: u64,
 }
 
+/// The hardware a renderer draws on, as the operator should know it: what a run reports, and whether the choice
+/// is a slow one on this machine.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum RenderDevice {
+    /// [`CpuRenderer`]: the deterministic rasteriser, on the tracker's own threads.
+    CpuRasteriser,
+    /// `GpuRenderer`: a Vulkan adapter through `wgpu`.
+    Vulkan {
+        /// The adapter's name, driver and device type, as the driver reports them.
+        adapter: String,
+        /// Whether the driver rasterises on the CPU (Mesa's lavapipe): no GPU does the work.
+        on_cpu: bool,
+    },
+}
+
+impl RenderDevice {
+    /// The warning an operator should see for this device, or `None`: a Vulkan driver that rasterises on the CPU
+    /// is slower than the CPU renderer (BENCHMARKS.md, "One tracker tick"), so choosing it is almost always a
+    /// mistake (no GPU driver installed, or none found).
+    pub fn warning(&self) -> Option<String> {
+        match self {
+            Self::Vulkan {
+                adapter,
+                on_cpu: true,
+            } => Some(format!(
+                "renderer \"gpu\" draws on {adapter}, a Vulkan driver that rasterises on this machine's CPU: no GPU \
+                 is in use, and the \"cpu\" renderer is faster here (choose renderer \"cpu\", or install the GPU's \
+                 Vulkan driver)"
+            )),
+            _ => None,
+        }
+    }
+}
+
+impl std::fmt::Display for RenderDevice {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::CpuRasteriser => f.write_str("cpu (deterministic rasteriser)"),
+            Self::Vulkan { adapter, on_cpu } => write!(
+                f,
+                "gpu: {adapter}{}",
+                if *on_cpu {
+                    " (rasterised on the CPU)"
+                } else {
+                    ""
+                }
+            ),
+        }
+    }
+}
+
 /// A renderer of posed triangle meshes. Object-safe: the tracker may hold a `Box<dyn Renderer>`.
 pub trait Renderer {
     /// Registers a mesh (for a GPU backend: uploads it) and returns its handle for this renderer.
     fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError>;
+
+    /// The hardware this renderer draws on.
+    fn device(&self) -> RenderDevice;
 
     /// Renders `scene` as seen by `camera` into `target` (resized to the camera's image size). The output is a pure
     /// function of the scene, the camera and the registered meshes.
@@ -223,6 +277,38 @@ mod tests {
         assert!(err.to_string().contains("`vulkan`"), "{err}");
         assert!(serde_json::from_str::<RendererKind>("\"Gpu\"").is_err());
         assert_eq!(RendererKind::default(), RendererKind::Cpu);
+    }
+
+    #[test]
+    fn only_a_vulkan_driver_on_the_cpu_is_warned_about() {
+        let lavapipe = RenderDevice::Vulkan {
+            adapter: "llvmpipe (LLVM 15.0.6, 256 bits) (Mesa 22.3.6, Cpu)".into(),
+            on_cpu: true,
+        };
+        let warning = lavapipe.warning().expect("lavapipe is warned about");
+        assert!(warning.contains("llvmpipe (LLVM 15.0.6"), "{warning}");
+        assert!(warning.contains("\"cpu\" renderer is faster"), "{warning}");
+        assert_eq!(
+            lavapipe.to_string(),
+            "gpu: llvmpipe (LLVM 15.0.6, 256 bits) (Mesa 22.3.6, Cpu) (rasterised on the CPU)"
+        );
+        let hardware = RenderDevice::Vulkan {
+            adapter: "NVIDIA H100 (NVIDIA 550.54, DiscreteGpu)".into(),
+            on_cpu: false,
+        };
+        assert_eq!(hardware.warning(), None);
+        assert_eq!(
+            hardware.to_string(),
+            "gpu: NVIDIA H100 (NVIDIA 550.54, DiscreteGpu)"
+        );
+        assert_eq!(RenderDevice::CpuRasteriser.warning(), None);
+        let cpu = create_renderer(RendererKind::Cpu).expect("CPU renderer always exists");
+        assert_eq!(cpu.device(), RenderDevice::CpuRasteriser);
+        assert_eq!(
+            RenderAhead::new(cpu).device(),
+            RenderDevice::CpuRasteriser,
+            "rendering ahead keeps the inner renderer's device"
+        );
     }
 
     #[test]

@@ -205,6 +205,8 @@ pub struct Health {
     pub events: u64,
     /// The tracker's own counters, if it keeps any.
     pub tracker: Option<TrackerCounters>,
+    /// The hardware the tracker renders on ([`crate::render::RenderDevice`] as text); `None` if it renders nothing.
+    pub renderer: Option<String>,
     /// How old each depth frame was when it reached the tracker thread: the latest event or edge time handed over
     /// by then less the frame's exposure, on the event camera's clock (a live depth camera's transport latency).
     pub depth_frame_age: LatencyHistogram,
@@ -256,6 +258,7 @@ impl Health {
             depth_frames: 0,
             events: 0,
             tracker: None,
+            renderer: None,
             depth_frame_age: LatencyHistogram::new(),
             depth_arrival: LatencyHistogram::new(),
             depth_frames_deferred: 0,
@@ -347,6 +350,7 @@ impl Health {
             },
             "sinks": sinks,
             "tracker": self.tracker,
+            "renderer": self.renderer,
         })
     }
 }

@@ -135,7 +135,14 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
     all.append(&mut sinks);
     let sinks = all;
     let sink_names: Vec<String> = sinks.iter().map(|s| s.name().to_string()).collect();
-    let health = Arc::new(Mutex::new(Health::new(&objects, &sink_names)));
+    let mut health = Health::new(&objects, &sink_names);
+    if let Some(device) = tracker.render_device() {
+        if let Some(warning) = device.warning() {
+            eprintln!("warning: {warning}");
+        }
+        health.renderer = Some(device.to_string());
+    }
+    let health = Arc::new(Mutex::new(health));
     let queue = Arc::new(IngestQueue::new(
         config.queue.event_batches,
         config.queue.batch_events,
@@ -315,6 +322,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
     }
     let summary = Summary {
         source: describe,
+        renderer: h.renderer.clone(),
         objects,
         ticks: h.ticks,
         poses: h.poses,

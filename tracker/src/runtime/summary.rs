@@ -24,6 +24,8 @@ pub struct SinkSummary {
 pub struct Summary {
     /// The source.
     pub source: String,
+    /// The hardware the tracker rendered on ([`crate::render::RenderDevice`] as text); `None` if it renders nothing.
+    pub renderer: Option<String>,
     /// Objects tracked.
     pub objects: Vec<String>,
     /// Ticks processed.
@@ -73,6 +75,9 @@ impl std::fmt::Display for Summary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let rate = |r: Option<f64>| r.map_or_else(|| "-".to_string(), |r| format!("{r:.1} Hz"));
         writeln!(f, "source:          {}", self.source)?;
+        if let Some(r) = &self.renderer {
+            writeln!(f, "renderer:        {r}")?;
+        }
         writeln!(
             f,
             "poses published: {} ({} ticks x {} objects: {}){}",

@@ -78,6 +78,10 @@ pub trait PoseTracker: Send {
     fn event_surface(&self) -> Option<&crate::recon::EventSurface> {
         None
     }
+    /// The hardware the tracker renders on; `None` if it renders nothing.
+    fn render_device(&self) -> Option<crate::render::RenderDevice> {
+        None
+    }
     /// What the tracker did so far (re-detections, depth fallbacks, render errors, dropped re-detection places);
     /// `None` if it keeps no counters.
     fn tracker_counters(&self) -> Option<TrackerCounters> {

@@ -150,6 +150,9 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     let meshes: Vec<_> = objects.iter().map(|o| o.mesh.clone()).collect();
     let rig = recording_rig(&rec)?;
     let renderer: Box<dyn Renderer + Send> = create_renderer(args.renderer)?;
+    if let Some(warning) = renderer.device().warning() {
+        eprintln!("warning: {warning}");
+    }
     let mut tracker = EventTrack6d::new(config, rig, objects, renderer)?;
     let mut overlay = match &args.overlay {
         Some(dir) => Some(OverlayWriter::new(

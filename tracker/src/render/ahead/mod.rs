@@ -12,7 +12,7 @@ mod request;
 #[cfg(test)]
 mod tests;
 
-use super::{MeshId, PrefetchCounts, RenderError, RenderTarget, Renderer, Scene};
+use super::{MeshId, PrefetchCounts, RenderDevice, RenderError, RenderTarget, Renderer, Scene};
 use crate::geometry::{PinholeCamera, Roi};
 use crate::mesh::Mesh;
 use helper::{Helper, Job};
@@ -168,6 +168,10 @@ impl Drop for RenderAhead {
 }
 
 impl Renderer for RenderAhead {
+    fn device(&self) -> RenderDevice {
+        self.inner.device()
+    }
+
     fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
         // The helper's fork would not know the mesh: the next prefetch forks again.
         self.stop_helper();

@@ -267,6 +267,9 @@ impl Renderer for Panics {
     fn add_mesh(&mut self, _: Arc<Mesh>) -> Result<MeshId, RenderError> {
         Ok(MeshId(0))
     }
+    fn device(&self) -> RenderDevice {
+        RenderDevice::CpuRasteriser
+    }
     fn render(
         &mut self,
         _: &Scene<'_>,
@@ -280,6 +283,9 @@ impl Renderer for Panics {
 impl Renderer for ForksPanic {
     fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
         self.0.add_mesh(mesh)
+    }
+    fn device(&self) -> RenderDevice {
+        self.0.device()
     }
     fn render(
         &mut self,

@@ -4,8 +4,8 @@ pub(super) mod prepared;
 mod raster;
 
 use super::{
-    MASK_BACKGROUND, MAX_PIXELS, MeshId, NormalCoverage, RenderError, RenderTarget, Renderer,
-    Scene, scene::MASK_EMPTY, surface_grid_stride,
+    MASK_BACKGROUND, MAX_PIXELS, MeshId, NormalCoverage, RenderDevice, RenderError, RenderTarget,
+    Renderer, Scene, scene::MASK_EMPTY, surface_grid_stride,
 };
 use crate::geometry::PinholeCamera;
 use crate::geometry::se3::to_glam_affine;
@@ -241,6 +241,10 @@ fn pose_is_finite(pose: &Isometry3<f64>) -> bool {
 }
 
 impl Renderer for CpuRenderer {
+    fn device(&self) -> RenderDevice {
+        RenderDevice::CpuRasteriser
+    }
+
     fn fork(&self) -> Option<Box<dyn Renderer + Send>> {
         Some(Box::new(Self {
             meshes: self.meshes.clone(),

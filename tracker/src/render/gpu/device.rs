@@ -13,6 +13,8 @@ pub(super) struct Gpu {
     pub(super) queue: wgpu::Queue,
     /// `adapter name (driver, device type)`.
     pub(super) description: String,
+    /// Whether the driver rasterises on the CPU (lavapipe).
+    pub(super) on_cpu: bool,
     /// The device's limits (texture size, buffer size, uniform alignment).
     pub(super) limits: wgpu::Limits,
     /// The first uncaptured device error since the last [`Gpu::take_error`].
@@ -84,6 +86,7 @@ impl Gpu {
             device,
             queue,
             description,
+            on_cpu: info.device_type == wgpu::DeviceType::Cpu,
             limits,
             errors,
         })

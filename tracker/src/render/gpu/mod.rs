@@ -16,8 +16,8 @@ mod readback;
 mod request;
 
 use super::{
-    MASK_BACKGROUND, MASK_EMPTY, MAX_PIXELS, MeshId, PrefetchCounts, RenderError, RenderTarget,
-    Renderer, Scene,
+    MASK_BACKGROUND, MASK_EMPTY, MAX_PIXELS, MeshId, PrefetchCounts, RenderDevice, RenderError,
+    RenderTarget, Renderer, Scene,
 };
 use crate::geometry::{PinholeCamera, Roi};
 use crate::mesh::Mesh;
@@ -229,6 +229,13 @@ impl GpuRenderer {
 }
 
 impl Renderer for GpuRenderer {
+    fn device(&self) -> RenderDevice {
+        RenderDevice::Vulkan {
+            adapter: self.gpu.description.clone(),
+            on_cpu: self.gpu.on_cpu,
+        }
+    }
+
     fn add_mesh(&mut self, mesh: Arc<Mesh>) -> Result<MeshId, RenderError> {
         let id = u32::try_from(self.meshes.len())
             .map_err(|_| RenderError::Backend("too many meshes".into()))?;

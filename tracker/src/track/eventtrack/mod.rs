@@ -338,6 +338,10 @@ impl PoseTracker for EventTrack6d {
         &self.names
     }
 
+    fn render_device(&self) -> Option<crate::render::RenderDevice> {
+        Some(self.renderer.device())
+    }
+
     fn push_events(&mut self, events: &[CdEvent]) {
         if self.config.events || self.config.depth != DepthUse::DepthFramesOnly {
             match self.retrack.as_mut() {
