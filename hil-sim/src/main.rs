@@ -75,8 +75,9 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
-        /// Sequences generated at once, one thread each (default: one per available core). The recordings do
-        /// not depend on it; memory grows by about 150 MiB per job.
+        /// Sequences generated at once (default: one per available core); each renders on one thread and
+        /// simulates the event sensor on another. The recordings do not depend on it; memory grows by about
+        /// 150 MiB per job.
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
         jobs: Option<u32>,
     },

@@ -93,6 +93,22 @@ fn same_seed_gives_byte_identical_recordings_and_triggers_follow_the_schedule() 
 }
 
 #[test]
+fn a_write_error_on_the_sensor_thread_stops_generation_and_names_the_file() {
+    // The sensor half (events, depth files) runs on its own thread behind the renderer: its failure must reach
+    // the caller, and rendering must stop rather than wait for a sensor that is gone.
+    let dir = tempfile::tempdir().unwrap();
+    let blocked = dir.path().join("depth").join("000001.png");
+    std::fs::create_dir_all(&blocked).unwrap();
+    let mut last_progress = 0.0;
+    let err = generate(&config(0.5), dir.path(), |t| last_progress = t)
+        .expect_err("the second depth frame cannot be written");
+    let message = err.to_string();
+    assert!(message.contains("000001.png"), "{message}");
+    // The second frame is exposed at 33 ms; the renderer runs at most a few steps ahead of the failure.
+    assert!(last_progress < 0.1, "rendering went on to {last_progress} s");
+}
+
+#[test]
 fn event_polarities_integrate_to_the_change_in_log_intensity() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = config(0.1);

@@ -174,6 +174,9 @@ pub enum GenerateError {
     /// The renderer refused the scene.
     #[error("rendering failed: {0}")]
     Render(#[from] RenderError),
+    /// A generation thread could not start or failed.
+    #[error("{0}")]
+    Thread(String),
     /// Copying a user mesh failed.
     #[error("{path}: {error}")]
     Io {
