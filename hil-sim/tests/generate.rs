@@ -105,7 +105,10 @@ fn a_write_error_on_the_sensor_thread_stops_generation_and_names_the_file() {
     let message = err.to_string();
     assert!(message.contains("000001.png"), "{message}");
     // The second frame is exposed at 33 ms; the renderer runs at most a few steps ahead of the failure.
-    assert!(last_progress < 0.1, "rendering went on to {last_progress} s");
+    assert!(
+        last_progress < 0.1,
+        "rendering went on to {last_progress} s"
+    );
 }
 
 #[test]

@@ -106,13 +106,15 @@ impl<'a> SensorSide<'a> {
             let target = &step.target;
             let (ex0, ey0, ew) = (r.ex0 as usize, r.ey0 as usize, r.ew as usize);
             let width = self.width as usize;
-            for (i, (&v, &m)) in target.intensity().iter().zip(target.mask()).enumerate() {
-                let (x, y) = (ex0 + i % ew, ey0 + i / ew);
-                self.composite.push(if m == MASK_EMPTY {
-                    self.background[y * width + x]
-                } else {
-                    v
-                });
+            let rows = target
+                .intensity()
+                .chunks_exact(ew)
+                .zip(target.mask().chunks_exact(ew));
+            for (y, (intensity, mask)) in (ey0..).zip(rows) {
+                let background = &self.background[y * width + ex0..][..ew];
+                let pixels = intensity.iter().zip(mask).zip(background);
+                self.composite
+                    .extend(pixels.map(|((&v, &m), &b)| if m == MASK_EMPTY { b } else { v }));
             }
             let inner = (r.x0 - r.ex0, r.y0 - r.ey0);
             optics_log(
