@@ -24,7 +24,7 @@ mod steps;
 use config::check;
 pub use config::{Companion, GenerateConfig, GenerateError, GenerateReport, ObjectSource};
 pub use optics::optics_log;
-use sensor::{SensorSide, Step};
+use sensor::{DepthCamera, SensorSide, Step};
 use stage::{Built, build, copy_user_obj};
 use std::sync::mpsc;
 use steps::{StepPlan, render_steps};
@@ -112,7 +112,7 @@ pub fn generate(
         frame_drop_probability: config.depth_drop_probability,
         ..DepthSensorModel::d435i(rig.depth_camera.fx)
     };
-    let mut depth_rng = SeedRng::new(config.seed ^ 0xDE97);
+    let depth_rng = SeedRng::new(config.seed ^ 0xDE97);
 
     // Initial state of the sensor.
     let mut target = RenderTarget::new();
@@ -144,7 +144,11 @@ pub fn generate(
         &mut log0,
     );
     let sim = EventSimulator::new(cam.width, cam.height, config.esim, config.seed, &log0);
-    let sensor = SensorSide::new(sim, writer, &background, cam.width, eps, &edges);
+    let depth_renderer = stage.renderer.fork().ok_or_else(|| {
+        GenerateError::Thread("the renderer cannot make a second one for the depth camera".into())
+    })?;
+    let depth = DepthCamera::new(rig.depth_camera, depth_model, depth_rng, depth_renderer);
+    let sensor = SensorSide::new(sim, writer, depth, &background, cam.width, eps, &edges);
     let tick_times: Vec<f64> = edges
         .iter()
         .filter(|e| e.rising)
@@ -152,9 +156,7 @@ pub fn generate(
         .collect();
     let plan = StepPlan {
         camera: cam,
-        depth_camera: rig.depth_camera,
         depth_frame: rig.t_event_depth.inverse(),
-        depth_model,
         tick_times: &tick_times,
         depth_times: &depth_times,
         t_end_us,
@@ -173,7 +175,6 @@ pub fn generate(
         let rendered = render_steps(
             &mut stage,
             &plan,
-            &mut depth_rng,
             || spent_rx.try_recv().unwrap_or_default(),
             |step| step_tx.send(step).is_ok(),
             &mut progress,
@@ -198,7 +199,7 @@ pub fn generate(
         esim: written.sim.stats(),
         trigger_edges: written.trigger_edges,
         depth_frames: written.depth_frames,
-        depth_frames_dropped: rendered.depth_frames_dropped,
+        depth_frames_dropped: written.depth_frames_dropped,
         ground_truth_rows: gt.len() as u64,
     };
     let parameters = metadata::parameters(config, &scene_objects, written.sim.contrast(), &report);

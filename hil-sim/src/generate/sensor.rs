@@ -1,15 +1,20 @@
-//! The event sensor's half of generation, on its own thread: it composites each rendered region over the static
-//! background, applies the optics and the logarithm, runs ESIM and writes events, trigger edges and depth frames
-//! in time order. Rendering, the other half, runs ahead on the calling thread. The recording is the same byte
+//! The sensors' half of generation, on its own thread: it composites each rendered region over the static
+//! background, applies the optics and the logarithm, runs ESIM, renders and measures the depth frames, and writes
+//! events, trigger edges and depth frames in time order. Rendering, the other half, runs ahead on the calling thread. The recording is the same byte
 //! for byte as with both halves on one thread: each half does the same work on the same data in the same order.
 
 use super::GenerateError;
 use super::optics::optics_log;
+use crate::depth_sensor::DepthSensorModel;
 use crate::esim::EventSimulator;
+use crate::rng::SeedRng;
 use drivers::event::{CdEvent, TriggerEdge};
 use drivers::recording::RecordingWriter;
 use std::sync::mpsc::{Receiver, Sender};
-use tracker::render::{MASK_EMPTY, RenderTarget};
+use tracker::geometry::PinholeCamera;
+use tracker::render::{
+    BackgroundMesh, Lighting, MASK_EMPTY, RenderTarget, Renderer, Scene, SceneObject,
+};
 
 /// The part of the event camera's image that can change in one step, and the region rendered for it.
 #[derive(Debug, Clone, Copy)]
@@ -27,13 +32,45 @@ pub(super) struct ChangingRegion {
     pub(super) eh: u32,
 }
 
-/// One depth frame measured through the sensor model, to be written.
+/// One depth frame's exposure: the scene posed at its time in the depth camera's frame.
 #[derive(Debug)]
-pub(super) struct MeasuredDepth {
+pub(super) struct DepthExposure {
     /// Frame index (the file name).
     pub(super) index: u64,
-    /// Depth, millimetres, row-major in the depth camera's pixels (0: invalid).
-    pub(super) mm: Vec<u16>,
+    /// Moving meshes and props.
+    pub(super) objects: Vec<SceneObject>,
+    pub(super) background: Vec<BackgroundMesh>,
+}
+
+/// The depth camera: renders each exposure and measures it through the sensor model.
+pub(super) struct DepthCamera {
+    pub(super) camera: PinholeCamera,
+    pub(super) model: DepthSensorModel,
+    /// The sensor model's random draws (frame drops, noise), in frame order.
+    pub(super) rng: SeedRng,
+    /// A renderer with the stage's meshes under the same handles.
+    pub(super) renderer: Box<dyn Renderer + Send>,
+    target: RenderTarget,
+    mm: Vec<u16>,
+}
+
+impl DepthCamera {
+    /// The depth camera `camera` measuring through `model` with draws from `rng`, rendering with `renderer`.
+    pub(super) fn new(
+        camera: PinholeCamera,
+        model: DepthSensorModel,
+        rng: SeedRng,
+        renderer: Box<dyn Renderer + Send>,
+    ) -> Self {
+        Self {
+            camera,
+            model,
+            rng,
+            renderer,
+            target: RenderTarget::new(),
+            mm: Vec::new(),
+        }
+    }
 }
 
 /// One simulation step, from the renderer to the sensor: the interval, the moving meshes rendered at its end
@@ -49,13 +86,14 @@ pub(super) struct Step {
     /// background).
     pub(super) target: RenderTarget,
     /// Depth frames exposed before `t1_us`, in order.
-    pub(super) depth: Vec<MeasuredDepth>,
+    pub(super) depth: Vec<DepthExposure>,
 }
 
 /// The sensor's state between steps.
 pub(super) struct SensorSide<'a> {
     pub(super) sim: EventSimulator,
     pub(super) writer: RecordingWriter,
+    pub(super) depth: DepthCamera,
     /// Linear intensity of the static props over the whole image, row-major.
     pub(super) background: &'a [f32],
     /// Event camera image width, pixels.
@@ -68,6 +106,8 @@ pub(super) struct SensorSide<'a> {
     next_edge: usize,
     /// Depth frames written.
     depth_frames: u64,
+    /// Depth frames the sensor model dropped.
+    depth_frames_dropped: u64,
     composite: Vec<f32>,
     log: Vec<f32>,
     events: Vec<CdEvent>,
@@ -78,6 +118,7 @@ impl<'a> SensorSide<'a> {
     pub(super) fn new(
         sim: EventSimulator,
         writer: RecordingWriter,
+        depth: DepthCamera,
         background: &'a [f32],
         width: u32,
         eps: f32,
@@ -86,12 +127,14 @@ impl<'a> SensorSide<'a> {
         Self {
             sim,
             writer,
+            depth,
             background,
             width,
             eps,
             edges,
             next_edge: 0,
             depth_frames: 0,
+            depth_frames_dropped: 0,
             composite: Vec::new(),
             log: Vec::new(),
             events: Vec::new(),
@@ -148,8 +191,21 @@ impl<'a> SensorSide<'a> {
         }
         self.writer
             .write_events(&self.events, &self.edges[edge_start..self.next_edge])?;
-        for d in &step.depth {
-            self.writer.write_depth_mm(d.index, &d.mm)?;
+        for exposure in &step.depth {
+            let d = &mut self.depth;
+            if d.model.drops_frame(&mut d.rng) {
+                self.depth_frames_dropped += 1;
+                continue;
+            }
+            let scene = Scene {
+                lighting: Lighting::default(),
+                ..Scene::objects(&exposure.objects).with_background(&exposure.background)
+            };
+            d.renderer.render(&scene, &d.camera, &mut d.target)?;
+            let t = &d.target;
+            d.model
+                .measure(t.depth(), t.width(), t.height(), &mut d.rng, &mut d.mm);
+            self.writer.write_depth_mm(exposure.index, &d.mm)?;
             self.depth_frames += 1;
         }
         Ok(())
@@ -181,6 +237,7 @@ impl<'a> SensorSide<'a> {
             sim: self.sim,
             trigger_edges: self.edges.len() as u64,
             depth_frames: self.depth_frames,
+            depth_frames_dropped: self.depth_frames_dropped,
         })
     }
 }
@@ -194,4 +251,6 @@ pub(super) struct SensorTotals {
     pub(super) trigger_edges: u64,
     /// Depth frames written.
     pub(super) depth_frames: u64,
+    /// Depth frames the sensor model dropped.
+    pub(super) depth_frames_dropped: u64,
 }

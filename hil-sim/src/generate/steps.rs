@@ -1,25 +1,21 @@
 //! The rendering half of generation: chooses each step's length (no projected vertex moves more than the step
 //! limit, and no step crosses a 120 Hz tick), renders the moving meshes over the region that can change, and
-//! measures the depth frames exposed in the step. What the steps become is the sensor's half
-//! ([`super::sensor`]).
+//! poses the scene for the depth frames exposed in the step. What the steps become is the sensor's half
+//! ([`super::sensor`]), which also renders and measures the depth frames.
 
 use super::GenerateError;
-use super::sensor::{ChangingRegion, MeasuredDepth, Step};
+use super::sensor::{ChangingRegion, DepthExposure, Step};
 use super::stage::Stage;
-use crate::depth_sensor::DepthSensorModel;
-use crate::rng::SeedRng;
 use nalgebra::Isometry3;
 use tracker::geometry::{PinholeCamera, Roi};
-use tracker::render::{RenderError, RenderTarget};
+use tracker::render::RenderError;
 
 /// What the steps need that does not change during generation.
 pub(super) struct StepPlan<'a> {
     /// The event camera.
     pub(super) camera: PinholeCamera,
-    /// The depth camera, and the pose of the event camera in its frame.
-    pub(super) depth_camera: PinholeCamera,
+    /// The pose of the event camera in the depth camera's frame.
     pub(super) depth_frame: Isometry3<f64>,
-    pub(super) depth_model: DepthSensorModel,
     /// Times of the rising 120 Hz edges, microseconds: steps end on them.
     pub(super) tick_times: &'a [f64],
     /// Depth exposures: frame index and time, microseconds, in order.
@@ -37,8 +33,6 @@ pub(super) struct RenderTotals {
     pub(super) renders: u64,
     /// Sum of the changing regions' areas, pixels.
     pub(super) region_px_sum: f64,
-    /// Depth frames the sensor model dropped.
-    pub(super) depth_frames_dropped: u64,
 }
 
 /// Renders every step of the sequence in order and hands each to `send` (which returns `false` once the sensor
@@ -47,7 +41,6 @@ pub(super) struct RenderTotals {
 pub(super) fn render_steps(
     stage: &mut Stage,
     plan: &StepPlan<'_>,
-    depth_rng: &mut SeedRng,
     mut spare: impl FnMut() -> Step,
     mut send: impl FnMut(Step) -> bool,
     mut progress: impl FnMut(f64),
@@ -65,7 +58,6 @@ pub(super) fn render_steps(
     let mut t_us = 0.0f64;
     let mut dt_us = 200.0f64;
     let target_px = plan.max_step_px;
-    let mut depth_target = RenderTarget::new();
     while t_us < plan.t_end_us {
         // Adaptive step: no projected vertex moves more than max_step_px.
         let sub0 = !stage.project(t_us * 1e-6, &cam, stride, &mut c0);
@@ -162,27 +154,12 @@ pub(super) fn render_steps(
         while next_depth < plan.depth_times.len() && (plan.depth_times[next_depth].1 as f64) < t1 {
             let (index, td) = plan.depth_times[next_depth];
             next_depth += 1;
-            if plan.depth_model.drops_frame(depth_rng) {
-                totals.depth_frames_dropped += 1;
-                continue;
-            }
-            stage.render(
-                td as f64 * 1e-6,
-                &plan.depth_frame,
-                &plan.depth_camera,
-                None,
-                &mut depth_target,
-                true,
-            )?;
-            let mut mm = Vec::new();
-            plan.depth_model.measure(
-                depth_target.depth(),
-                depth_target.width(),
-                depth_target.height(),
-                depth_rng,
-                &mut mm,
-            );
-            step.depth.push(MeasuredDepth { index, mm });
+            let (objects, background) = stage.instances(td as f64 * 1e-6, &plan.depth_frame, true);
+            step.depth.push(DepthExposure {
+                index,
+                objects,
+                background,
+            });
         }
         if !send(step) {
             break;
