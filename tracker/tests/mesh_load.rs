@@ -202,6 +202,19 @@ fn missing_or_corrupt_material_files_are_reported() {
     write(dir.path(), "cube.mtl", b"newmtl painted\nKd 1 x 1\n");
     let (_, msg) = err_of(&obj);
     assert!(msg.contains("cube.mtl"), "{msg}");
+
+    // A colour with two numbers: the OBJ parser underneath panics on it, so it is refused before, by line.
+    write(
+        dir.path(),
+        "cube.mtl",
+        b"newmtl painted\n\nKs 1 1 1\nKd  0 0\n",
+    );
+    let (e, msg) = err_of(&obj);
+    assert!(matches!(e, MeshError::Parse { kind: "MTL", .. }), "{e:?}");
+    assert!(
+        msg.contains("cube.mtl") && msg.contains("line 4: `Kd` needs three numbers"),
+        "{msg}"
+    );
 }
 
 #[test]

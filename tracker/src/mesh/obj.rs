@@ -97,6 +97,23 @@ fn convert_materials(
         .collect()
 }
 
+/// The first colour line (`Ka`, `Kd`, `Ks`, `Ke`) of an MTL file with fewer than three numbers, as the reason to
+/// refuse the file: `tobj` 4 panics on such a line instead of reporting it.
+fn short_colour_line(mtl: &[u8]) -> Option<String> {
+    let text = String::from_utf8_lossy(mtl);
+    text.lines().enumerate().find_map(|(i, line)| {
+        let mut words = line.split_whitespace();
+        let key = words.next()?;
+        let found = words.count();
+        (matches!(key, "Ka" | "Kd" | "Ks" | "Ke") && found < 3).then(|| {
+            format!(
+                "line {}: `{key}` needs three numbers (red, green, blue), found {found}",
+                i + 1
+            )
+        })
+    })
+}
+
 /// Loads an OBJ file (triangulating polygons) with its MTL materials and diffuse textures, scaled by
 /// `options.scale` into metres.
 ///
@@ -129,6 +146,14 @@ pub fn load_obj(path: &Path, options: &MeshLoadOptions) -> Result<LoadedMesh, Me
             };
             match std::fs::read(&mtl_path) {
                 Ok(data) => {
+                    if let Some(reason) = short_colour_line(&data) {
+                        record(MeshError::Parse {
+                            path: mtl_path.clone(),
+                            kind: "MTL",
+                            reason,
+                        });
+                        return Err(tobj::LoadError::MaterialParseError);
+                    }
                     tobj::load_mtl_buf(&mut BufReader::new(Cursor::new(data))).inspect_err(|e| {
                         record(MeshError::Parse {
                             path: mtl_path.clone(),
