@@ -201,6 +201,7 @@ pub fn format_bop_csv(rows: &[BopRow]) -> String {
 mod tests {
     use super::*;
     use nalgebra::Vector3;
+    use proptest::prelude::*;
 
     fn sample() -> PoseRecord {
         PoseRecord {
@@ -209,6 +210,79 @@ mod tests {
             pose: Isometry3::new(Vector3::new(0.1, -0.2, 0.5), Vector3::new(0.0, 0.0, 0.3)),
             quality: 0.75,
             state: "tracking".into(),
+        }
+    }
+
+    /// A pose CSV field as files may have it: a number, an extreme or non-finite one, text or nothing.
+    fn field() -> impl Strategy<Value = String> {
+        prop_oneof![
+            4 => (-2.0f64..2.0).prop_map(|v| v.to_string()),
+            2 => any::<i64>().prop_map(|v| v.to_string()),
+            1 => Just("NaN".to_string()),
+            1 => Just("-inf".to_string()),
+            1 => Just("1e309".to_string()),
+            1 => Just(String::new()),
+            1 => "[a-z ]{1,6}",
+        ]
+    }
+
+    proptest! {
+        #[test]
+        fn arbitrary_rows_parse_or_name_their_line(
+            rows in prop::collection::vec(prop::collection::vec(field(), 0..13), 0..8),
+            bytes in prop::collection::vec(any::<u8>(), 0..200),
+        ) {
+            let mut text = format!("{POSE_CSV_HEADER}\n");
+            for r in &rows {
+                text.push_str(&r.join(","));
+                text.push('\n');
+            }
+            match parse_pose_csv(&text) {
+                Ok(records) => {
+                    prop_assert!(records.len() <= rows.len());
+                    for r in &records {
+                        prop_assert!(r.pose.translation.vector.iter().all(|v| v.is_finite()));
+                        prop_assert!((r.pose.rotation.norm() - 1.0).abs() < 1e-9);
+                        prop_assert!(r.quality.is_finite() && !r.object.is_empty());
+                    }
+                }
+                Err(e) => prop_assert!((2..=rows.len() + 1).contains(&e.line), "{}", e),
+            }
+            if let Err(e) = parse_pose_csv(&String::from_utf8_lossy(&bytes)) {
+                prop_assert!(e.line >= 1 && !e.reason.is_empty());
+            }
+        }
+
+        #[test]
+        fn written_rows_read_back(
+            t_us in any::<i64>(),
+            object in "[a-z_]{1,10}",
+            t in prop::array::uniform3(-5.0f64..5.0),
+            q in prop::array::uniform4(-1.0f64..1.0),
+            quality in 0.0f32..=1.0,
+            state in prop_oneof![Just("tracking"), Just("degraded"), Just("lost")],
+        ) {
+            let q = nalgebra::Quaternion::new(q[3], q[0], q[1], q[2]);
+            prop_assume!(q.norm() > 1e-3);
+            let record = PoseRecord {
+                t_us,
+                object,
+                pose: Isometry3::from_parts(
+                    Translation3::new(t[0], t[1], t[2]),
+                    UnitQuaternion::from_quaternion(q),
+                ),
+                quality: f64::from(quality),
+                state: state.to_string(),
+            };
+            let back = parse_pose_csv(&format_pose_csv(std::slice::from_ref(&record)))
+                .map_err(|e| TestCaseError::fail(e.to_string()))?;
+            prop_assert_eq!(back.len(), 1);
+            let b = &back[0];
+            prop_assert_eq!((b.t_us, &b.object, &b.state), (record.t_us, &record.object, &record.state));
+            prop_assert_eq!(b.pose.translation, record.pose.translation);
+            prop_assert!(b.pose.rotation.angle_to(&record.pose.rotation) < 1e-9);
+            // The quality is written as the tracker's f32 (shortest form), so it reads back as that f32.
+            prop_assert_eq!(b.quality as f32, quality);
         }
     }
 

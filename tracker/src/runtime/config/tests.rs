@@ -208,3 +208,61 @@ fn shipped_configurations_load_and_the_rig_says_live_is_not_there_yet() {
         .to_string();
     assert!(e.contains("eventtrack6d demo"), "{e}");
 }
+
+/// A TOML value of any type, in or out of range.
+fn any_value() -> impl proptest::strategy::Strategy<Value = String> {
+    use proptest::prelude::*;
+    prop_oneof![
+        any::<i64>().prop_map(|v| v.to_string()),
+        (-1e6f64..1e6).prop_map(|v| format!("{v:?}")),
+        Just("nan".to_string()),
+        Just("-inf".to_string()),
+        any::<bool>().prop_map(|v| v.to_string()),
+        "[a-z0-9/._:-]{0,12}".prop_map(|s| format!("{s:?}")),
+        Just("[]".to_string()),
+        Just("[1, \"x\"]".to_string()),
+        Just("{ a = 1 }".to_string()),
+        Just("\"\"\"\nmulti\n\"\"\"".to_string()),
+    ]
+}
+
+proptest::proptest! {
+    /// The shipped defaults with values replaced, lines dropped or repeated, and random text mixed in: parsing
+    /// never panics, and every refusal names where it came from.
+    #[test]
+    fn mutated_configurations_parse_or_name_the_file_and_key(
+        edits in proptest::collection::vec((0usize..200, 0u8..4, any_value()), 0..6),
+        noise in "[ -~\n]{0,40}",
+    ) {
+        let mut lines: Vec<String> = DEFAULT_CONFIG_TOML.lines().map(str::to_string).collect();
+        for (at, what, value) in edits {
+            let i = at % lines.len();
+            match what {
+                0 => {
+                    if let Some((key, _)) = lines[i].split_once('=') {
+                        lines[i] = format!("{key}= {value}");
+                    }
+                }
+                1 => {
+                    lines.remove(i);
+                }
+                2 => {
+                    let repeated = lines[i].clone();
+                    lines.insert(i, repeated);
+                }
+                _ => lines.insert(i, format!("extra_{i} = {value}")),
+            }
+        }
+        lines.push(noise);
+        match parse(&lines.join("\n")) {
+            Ok(c) => {
+                proptest::prop_assert!(c.validate("again.toml").is_ok());
+            }
+            Err(e) => {
+                let message = e.to_string();
+                proptest::prop_assert!(message.starts_with("test.toml: "), "{}", message);
+                proptest::prop_assert!(message.len() > "test.toml: ".len() + 5, "{}", message);
+            }
+        }
+    }
+}
