@@ -227,3 +227,54 @@ fn inconsistent_geometry_and_bad_json_are_named() {
         "orthonormal",
     );
 }
+
+/// A damaged copy of `bytes`: some bytes replaced, then cut short or not.
+fn damage(bytes: &[u8], edits: &[(usize, u8)], keep: Option<usize>) -> Vec<u8> {
+    let mut out = bytes.to_vec();
+    for &(at, b) in edits {
+        if !out.is_empty() {
+            let i = at % out.len();
+            out[i] = b;
+        }
+    }
+    if let Some(k) = keep {
+        out.truncate(k % (bytes.len() + 1));
+    }
+    out
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+    /// A recording with one of its JSON files, its ground truth or a depth image damaged opens or is refused
+    /// with an error naming a file of the recording, and never panics; a damaged depth image that opens is
+    /// refused by name when its frame is read.
+    #[test]
+    fn damaged_files_are_refused_by_name(
+        file in 0usize..5,
+        edits in proptest::collection::vec((proptest::prelude::any::<usize>(), proptest::prelude::any::<u8>()), 0..6),
+        keep in proptest::option::of(proptest::prelude::any::<usize>()),
+    ) {
+        let tmp = tempfile::tempdir().unwrap();
+        write_sample(tmp.path());
+        let name = ["camera.json", "meta.json", "models/models_info.json", "groundtruth.csv", "depth/000001.png"][file];
+        let path = tmp.path().join(name);
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::write(&path, damage(&bytes, &edits, keep)).unwrap();
+        let dir = tmp.path().display().to_string();
+        match Recording::open(tmp.path()) {
+            Err(e) => {
+                let message = e.to_string();
+                proptest::prop_assert!(message.contains(&dir), "{}", message);
+            }
+            Ok(rec) => {
+                for n in rec.depth_frames.clone() {
+                    if let Err(e) = rec.depth_frame(n) {
+                        let message = e.to_string();
+                        proptest::prop_assert!(message.contains(&format!("{n:06}.png")), "{}", message);
+                    }
+                }
+            }
+        }
+    }
+}
