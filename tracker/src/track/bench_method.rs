@@ -261,3 +261,45 @@ impl Method for TrackerMethod {
         Ok(out)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn init_noise_text_is_two_numbers_at_least_zero() {
+        let n = InitNoise::parse(" 5, 2.5 ", 7).expect("two numbers");
+        assert_eq!((n.degrees, n.centimetres, n.seed), (5.0, 2.5, 7));
+        for bad in ["5", "5,5,5", "-1,0", "x,1", "1,inf", "", "1,"] {
+            let e = InitNoise::parse(bad, 0).expect_err(bad);
+            assert!(e.contains(&format!("`{bad}`")), "{e}");
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn any_text_parses_or_says_why(text in "[0-9eE.,+ inf-]{0,12}", seed in any::<u64>()) {
+            match InitNoise::parse(&text, seed) {
+                Ok(n) => prop_assert!(n.degrees.is_finite() && n.degrees >= 0.0 && n.centimetres.is_finite() && n.centimetres >= 0.0),
+                Err(e) => prop_assert!(e.starts_with("init noise `"), "{}", e),
+            }
+        }
+
+        /// The perturbed first pose is off by exactly the requested angle and distance, whatever the seed.
+        #[test]
+        fn the_perturbation_has_the_requested_size(
+            degrees in 0.0f64..179.0,
+            centimetres in 0.0f64..50.0,
+            seed in any::<u64>(),
+            t in prop::array::uniform3(-1.0f64..1.0),
+            r in prop::array::uniform3(-3.0f64..3.0),
+        ) {
+            let pose = Isometry3::new(Vector3::from(t), Vector3::from(r));
+            let noisy = InitNoise { degrees, centimetres, seed }.apply(&pose);
+            prop_assert!((noisy.rotation.angle_to(&pose.rotation).to_degrees() - degrees).abs() < 1e-6);
+            let moved = (noisy.translation.vector - pose.translation.vector).norm() * 100.0;
+            prop_assert!((moved - centimetres).abs() < 1e-9);
+        }
+    }
+}
