@@ -512,6 +512,65 @@ fn geometry_only_render_keeps_geometry_and_skips_intensity() {
 }
 
 #[test]
+fn a_reused_target_keeps_nothing_of_its_previous_render() {
+    // The renderer does not clear the target before shading: every pixel must be written by the render itself.
+    let (mut r, ids) = renderer_with(vec![sphere(0.08, 20, 40), square(2.0, Some(checker(4, 8)))]);
+    let objects = [SceneObject {
+        mesh: ids[0],
+        pose: at(0.03, 0.0, 0.5),
+        id: 1,
+    }];
+    let moved = [SceneObject {
+        mesh: ids[0],
+        pose: at(-0.06, 0.02, 0.45),
+        id: 3,
+    }];
+    let background = [BackgroundMesh {
+        mesh: ids[1],
+        pose: at(0.0, 0.0, 1.0),
+    }];
+    let full = Scene::objects(&objects).with_background(&background);
+    // Each scene after one that wrote what it must overwrite: shaded pixels under a surface grid's skipped
+    // ones, objects under empty pixels, intensity under a geometry-only render.
+    let scenes = [
+        full,
+        full.geometry_only().normals_on_surface_grid(200),
+        full,
+        Scene::objects(&[]),
+        Scene::objects(&moved),
+        full.geometry_only(),
+        Scene::objects(&moved).geometry_only(),
+        full,
+    ];
+    let cam = vga();
+    let bits = |t: &RenderTarget| {
+        (
+            t.depth().iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+            t.normals()
+                .iter()
+                .map(|n| n.map(f32::to_bits))
+                .collect::<Vec<_>>(),
+            t.mask().to_vec(),
+            t.intensity()
+                .iter()
+                .map(|x| x.to_bits())
+                .collect::<Vec<_>>(),
+        )
+    };
+    let mut reused = RenderTarget::new();
+    for (k, scene) in scenes.iter().enumerate() {
+        r.render(scene, &cam, &mut reused).unwrap();
+        let mut fresh = RenderTarget::new();
+        r.render(scene, &cam, &mut fresh).unwrap();
+        assert!(
+            bits(&reused) == bits(&fresh),
+            "scene {k} differs in a reused target"
+        );
+    }
+    assert!(reused.intensity().iter().any(|&i| i > 0.0));
+}
+
+#[test]
 fn surface_grid_normals_match_the_full_render_on_each_objects_grid() {
     let (mut r, ids) = renderer_with(vec![sphere(0.08, 20, 40), cube(0.1), square(2.0, None)]);
     // The cube partly hides the sphere: each object's grid pitch comes from its own visible pixels.

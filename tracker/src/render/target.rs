@@ -31,6 +31,18 @@ impl RenderTarget {
         t
     }
 
+    /// Resizes to `width x height` without clearing: pixels keep stale values until the caller writes them, so
+    /// the caller must write every pixel (the CPU renderer's shading pass does, background included).
+    pub(crate) fn resize_for_overwrite(&mut self, width: u32, height: u32) {
+        let n = width as usize * height as usize;
+        self.width = width;
+        self.height = height;
+        self.depth.resize(n, 0.0);
+        self.intensity.resize(n, 0.0);
+        self.normals.resize(n, [0.0; 3]);
+        self.mask.resize(n, super::MASK_EMPTY);
+    }
+
     /// Resizes to `width x height` and clears every pixel to "nothing rendered" (no reallocation when capacity allows).
     pub(crate) fn reset(&mut self, width: u32, height: u32) {
         let n = width as usize * height as usize;

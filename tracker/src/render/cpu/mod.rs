@@ -170,7 +170,8 @@ impl CpuRenderer {
         }
     }
 
-    /// Shading pass: resolves every visible pixel into the target.
+    /// Shading pass: resolves every pixel into the target (visible ones shaded, the rest "nothing rendered"), so
+    /// the target needs no clearing before it.
     fn shade(&self, scene: &Scene<'_>, camera: &PinholeCamera, target: &mut RenderTarget) {
         let l = &scene.lighting;
         let light = Vec3A::new(
@@ -191,15 +192,21 @@ impl CpuRenderer {
         for (v, row) in self.vis.instance.chunks_exact(width.max(1)).enumerate() {
             let ray_y = (v as f32 - cy) * inv_fy;
             for (u, &inst) in row.iter().enumerate() {
+                let idx = v * width + u;
                 if inst == NO_INSTANCE {
+                    target.depth[idx] = 0.0;
+                    target.mask[idx] = MASK_EMPTY;
+                    target.normals[idx] = [0.0; 3];
+                    target.intensity[idx] = 0.0;
                     continue;
                 }
-                let idx = v * width + u;
                 let info = &self.instances[usize::from(inst)];
                 target.depth[idx] = 1.0 / self.vis.inv_z[idx];
                 target.mask[idx] = info.mask;
                 let stride = self.normal_stride[usize::from(inst)];
                 if stride > 1 && (u % stride != 0 || v % stride != 0) {
+                    target.normals[idx] = [0.0; 3];
+                    target.intensity[idx] = 0.0;
                     continue;
                 }
                 let mesh = &self.meshes[info.mesh];
@@ -221,6 +228,7 @@ impl CpuRenderer {
                 }
                 target.normals[idx] = n.to_array();
                 if !scene.shade_intensity {
+                    target.intensity[idx] = 0.0;
                     continue;
                 }
                 let albedo = match &mesh.albedo[mesh.triangle_materials[tri] as usize] {
@@ -277,7 +285,7 @@ impl Renderer for CpuRenderer {
             return Err(RenderError::InvalidNear(scene.near));
         }
         self.collect_instances(scene)?;
-        target.reset(w, h);
+        target.resize_for_overwrite(w, h);
         target.camera = Some(*camera);
         self.vis.reset(w as usize, h as usize);
         let proj = Projector::new(
