@@ -442,6 +442,7 @@ fn pose_queries_answer_at_any_time_between_published_ticks() {
         "{json}"
     );
     assert_eq!(json["state"], "tracking");
+    assert_eq!(json["revised"], false);
     // The same time as the pose topic's header stamp.
     let by_stamp = ask(
         &asker,
@@ -462,6 +463,24 @@ fn pose_queries_answer_at_any_time_between_published_ticks() {
         }
     }
     assert_eq!(sink.pose_query_counts(), (2, 4));
+    // The tracker revises the third tick (tracked again from a late depth frame): queries answer with it.
+    let third = 100_000 + 2 * 8_333;
+    sink.revise(&[PoseEstimate {
+        object: 0,
+        t_us: third,
+        pose: at(5),
+        quality: 0.9,
+        state: TrackingState::Tracking,
+    }]);
+    let replies = ask(&asker, &format!("{key}?t_us={third}"));
+    let json: serde_json::Value =
+        serde_json::from_str(replies[0].as_ref().expect("a pose")).unwrap();
+    assert_eq!(json["revised"], true, "{json}");
+    assert!(
+        (json["position"][0].as_f64().unwrap() - 0.05).abs() < 1e-12,
+        "{json}"
+    );
+    assert_eq!(json["quality"], 0.9);
 }
 
 #[test]

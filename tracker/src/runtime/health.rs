@@ -205,6 +205,9 @@ pub struct Health {
     pub events: u64,
     /// The tracker's own counters, if it keeps any.
     pub tracker: Option<TrackerCounters>,
+    /// Estimates of published ticks the tracker revised (tracked again from a late depth frame) and handed to
+    /// the sinks, so far ([`crate::publish::PoseSink::revise`]).
+    pub poses_revised: u64,
     /// The hardware the tracker renders on ([`crate::render::RenderDevice`] as text); `None` if it renders nothing.
     pub renderer: Option<String>,
     /// How old each depth frame was when it reached the tracker thread: the latest event or edge time handed over
@@ -259,6 +262,7 @@ impl Health {
             events: 0,
             tracker: None,
             renderer: None,
+            poses_revised: 0,
             depth_frame_age: LatencyHistogram::new(),
             depth_arrival: LatencyHistogram::new(),
             depth_frames_deferred: 0,
@@ -346,6 +350,7 @@ impl Health {
                 "depth_frames_deferred": self.depth_frames_deferred,
                 "depth_frames_too_old": self.depth_frames_too_old,
                 "depth_frames_shed": self.depth_frames_shed,
+                "poses_revised": self.poses_revised,
                 "queue_max_batches": self.queue.max_depth,
             },
             "sinks": sinks,

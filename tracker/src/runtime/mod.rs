@@ -17,6 +17,7 @@ pub mod latency_log;
 pub mod pulse_hold;
 pub mod queue;
 pub mod replay;
+mod revision;
 pub mod setup;
 pub mod sinks;
 pub mod source;
@@ -335,6 +336,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         depth_frames_deferred: h.depth_frames_deferred,
         depth_frames_too_old: h.depth_frames_too_old,
         depth_frames_shed: h.depth_frames_shed,
+        poses_revised: h.poses_revised,
         sinks: h
             .sinks
             .iter()

@@ -51,6 +51,9 @@ pub struct Summary {
     pub depth_frames_too_old: u64,
     /// Late depth frames carried only, because the tracker thread had fallen behind.
     pub depth_frames_shed: u64,
+    /// Estimates of published ticks the tracker revised afterwards, handed to the sinks (the pose queries answer
+    /// with them).
+    pub poses_revised: u64,
     /// Per sink.
     pub sinks: Vec<SinkSummary>,
     /// Queue counters (dropped events).
@@ -159,7 +162,7 @@ impl std::fmt::Display for Summary {
             let (a, w) = (&self.depth_frame_age, &self.depth_arrival);
             writeln!(
                 f,
-                "depth arrival:   {} frames, age p50 {} p99 {} max {} ms (exposure -> tracker thread, camera clock); tracker work then p50 {} p99 {} max {} ms; {} deferred (carried at the next tick, tracked again after its poses); {} carried only (the tracker thread was behind); {} older than max_depth_age_ms",
+                "depth arrival:   {} frames, age p50 {} p99 {} max {} ms (exposure -> tracker thread, camera clock); tracker work then p50 {} p99 {} max {} ms; {} deferred (carried at the next tick, tracked again after its poses); {} carried only (the tracker thread was behind); {} older than max_depth_age_ms; {} poses of published ticks revised (the pose queries answer with them)",
                 w.samples,
                 ms(a.p50_us),
                 ms(a.p99_us),
@@ -169,7 +172,8 @@ impl std::fmt::Display for Summary {
                 ms(w.max_us),
                 self.depth_frames_deferred,
                 self.depth_frames_shed,
-                self.depth_frames_too_old
+                self.depth_frames_too_old,
+                self.poses_revised
             )?;
         }
         if !self.source_stats.anomalies.is_empty() {

@@ -7,6 +7,7 @@ use super::health::Health;
 use super::latency_log::{LatencyLog, TickTiming};
 use super::pulse_hold::PulseHold;
 use super::queue::{Ingest, IngestQueue};
+use super::revision::PoseRevisions;
 use crate::publish::{PoseSink, TickPoses};
 use crate::track::{PoseEstimate, PoseTracker};
 use drivers::timeline::{TimelineConfig, TriggerTimeline};
@@ -47,6 +48,9 @@ impl<S: PoseSink> PoseSink for SharedSink<S> {
     }
     fn flush(&mut self) -> Result<(), crate::publish::PublishError> {
         self.lock().flush()
+    }
+    fn revise(&mut self, revised: &[crate::track::PoseEstimate]) {
+        self.lock().revise(revised);
     }
 }
 
@@ -115,6 +119,8 @@ pub struct Worker {
     depth_age_limit_us: Option<i64>,
     /// Whether a frame older than that was reported.
     reported_old_depth: bool,
+    /// Published ticks, for handing the sinks what the tracker revises of them.
+    revisions: PoseRevisions,
 }
 
 impl Worker {
@@ -127,6 +133,7 @@ impl Worker {
         health: Arc<Mutex<Health>>,
     ) -> Self {
         let objects = tracker.objects().to_vec();
+        let objects_count = objects.len();
         let n = sinks.len();
         Self {
             estimates: Vec::with_capacity(objects.len().max(1) * 2),
@@ -149,6 +156,7 @@ impl Worker {
             last_waited: Duration::ZERO,
             depth_age_limit_us: None,
             reported_old_depth: false,
+            revisions: PoseRevisions::new(objects_count),
         }
     }
 
@@ -322,6 +330,8 @@ impl Worker {
             self.tracker.push_depth(t_us, &mut frame);
             let work = start.elapsed();
             self.arrival.record(t_us, self.last_tick_us, work);
+            self.revisions
+                .after_depth(t_us, &*self.tracker, &mut self.sinks);
             Some(work)
         };
         let mut h = self.health();
@@ -388,7 +398,9 @@ impl Worker {
                 o.t_us = Some(e.t_us);
             }
         }
+        h.poses_revised = self.revisions.handed();
         drop(h);
+        self.revisions.published(tick.t_us);
         self.last_tick_us = Some(tick.t_us);
         self.last_waited = tick_start.saturating_duration_since(decoded_at);
         // The poses are out: start the next tick's work (its renders, and tracking again for a frame deferred)
@@ -399,6 +411,8 @@ impl Worker {
             let work = prepare_start.elapsed();
             self.arrival.record(t_us, self.last_tick_us, work);
             self.health().depth_arrival.record(work);
+            self.revisions
+                .after_depth(t_us, &*self.tracker, &mut self.sinks);
         }
         if let Some(log) = &mut self.latency_log {
             log.record(&TickTiming {

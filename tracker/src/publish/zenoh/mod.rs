@@ -344,6 +344,17 @@ impl PoseSink for ZenohPosePublisher {
         first_err.map_or(Ok(()), |m| Err(transport(m)))
     }
 
+    /// Takes the tracker's revised poses into the poses queries answer from (the topic keeps what it sent).
+    fn revise(&mut self, revised: &[crate::track::PoseEstimate]) {
+        if !self.queryables.is_empty()
+            && let Ok(mut recent) = self.recent.lock()
+        {
+            for estimate in revised {
+                recent.revise(estimate);
+            }
+        }
+    }
+
     fn counters(&self) -> SinkCounters {
         self.counters
     }

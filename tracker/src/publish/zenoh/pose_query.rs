@@ -27,6 +27,18 @@ struct Kept {
     pose: Isometry3<f64>,
     quality: f32,
     state: TrackingState,
+    /// Whether the tracker revised it after it was published ([`RecentPoses::revise`]).
+    revised: bool,
+}
+
+/// The answer to a pose query.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct QueriedPose {
+    /// The pose at the requested time.
+    pub estimate: PoseEstimate,
+    /// Whether a pose it comes from was revised after it was published: the tracker tracked that tick again
+    /// from a depth frame that arrived late, so the answer differs from what the topic carried.
+    pub revised: bool,
 }
 
 /// The poses the sink published recently, per object, oldest first; times strictly increase. Filled by the
@@ -103,13 +115,35 @@ impl RecentPoses {
             pose: e.pose,
             quality: e.quality,
             state: e.state,
+            revised: false,
         });
     }
 
-    /// The pose of `object` at `t_us`: interpolated on SE(3) between the poses around it (quality the lower of
-    /// the two, state the worse), the latest one's exactly at its time, or extrapolated from the latest two at most
-    /// [`MAX_EXTRAPOLATION_US`] past it (state at best `degraded` past one tick).
-    pub fn at(&self, object: usize, t_us: i64) -> Result<PoseEstimate, PoseQueryError> {
+    /// Replaces the kept pose of `e`'s object at exactly `e.t_us` with `e`, marked revised if it differs;
+    /// returns whether it did. A time or object not kept is ignored (no allocation).
+    pub fn revise(&mut self, e: &PoseEstimate) -> bool {
+        let Some(kept) = self.objects.get_mut(e.object) else {
+            return false;
+        };
+        let i = kept.partition_point(|k| k.t_us < e.t_us);
+        let Some(k) = kept.get_mut(i).filter(|k| k.t_us == e.t_us) else {
+            return false;
+        };
+        if (k.pose, k.quality, k.state) == (e.pose, e.quality, e.state) {
+            return false;
+        }
+        k.pose = e.pose;
+        k.quality = e.quality;
+        k.state = e.state;
+        k.revised = true;
+        true
+    }
+
+    /// The pose of `object` at `t_us`: a kept pose exactly at its own time, else interpolated on SE(3) between
+    /// the poses around it (quality the lower of the two, state the worse), or extrapolated from the latest two
+    /// at most [`MAX_EXTRAPOLATION_US`] past it (state at best `degraded` past one tick). Says whether a pose it
+    /// comes from was revised.
+    pub fn at(&self, object: usize, t_us: i64) -> Result<QueriedPose, PoseQueryError> {
         let kept = self.objects.get(object).ok_or(PoseQueryError::NoPoseYet)?;
         let (first, last) = match (kept.front(), kept.back()) {
             (Some(f), Some(l)) => (*f, *l),
@@ -127,16 +161,24 @@ impl RecentPoses {
                 latest_us: last.t_us,
             });
         }
-        let estimate = |pose, quality, state| PoseEstimate {
-            object,
-            t_us,
-            pose,
-            quality,
-            state,
+        let estimate = |pose, quality, state, revised| QueriedPose {
+            estimate: PoseEstimate {
+                object,
+                t_us,
+                pose,
+                quality,
+                state,
+            },
+            revised,
         };
         if t_us >= last.t_us {
-            let Some(before) = kept.len().checked_sub(2).and_then(|i| kept.get(i)) else {
-                return Ok(estimate(last.pose, last.quality, last.state));
+            let Some(before) = kept
+                .len()
+                .checked_sub(2)
+                .and_then(|i| kept.get(i))
+                .filter(|_| t_us > last.t_us)
+            else {
+                return Ok(estimate(last.pose, last.quality, last.state, last.revised));
             };
             let s = (t_us - before.t_us) as f64 / (last.t_us - before.t_us) as f64;
             let state = if t_us > last.t_us && last.state == TrackingState::Tracking {
@@ -148,16 +190,21 @@ impl RecentPoses {
                 se3::interpolate(&before.pose, &last.pose, s),
                 last.quality,
                 state,
+                before.revised || last.revised,
             ));
         }
         // first.t_us <= t_us < last.t_us: the first kept pose after t_us exists and is not the front.
         let after = kept.partition_point(|k| k.t_us <= t_us);
         let (a, b) = (kept[after - 1], kept[after]);
+        if t_us == a.t_us {
+            return Ok(estimate(a.pose, a.quality, a.state, a.revised));
+        }
         let s = (t_us - a.t_us) as f64 / (b.t_us - a.t_us) as f64;
         Ok(estimate(
             se3::interpolate(&a.pose, &b.pose, s),
             a.quality.min(b.quality),
             worse(a.state, b.state),
+            a.revised || b.revised,
         ))
     }
 }
@@ -180,8 +227,10 @@ pub fn requested_time(parameters: &str, ros_time_offset_ns: i64) -> Result<i64, 
 }
 
 /// The JSON answer to a query: the object's name, the time asked for on both clocks, the pose (`T_cam_obj`,
-/// metres, unit quaternion x y z w, the event camera's frame as on the pose topic), quality and state.
-pub fn answer_json(name: &str, e: &PoseEstimate, ros_time_offset_ns: i64) -> String {
+/// metres, unit quaternion x y z w, the event camera's frame as on the pose topic), quality, state, and whether
+/// it comes from a pose the tracker revised after publishing it.
+pub fn answer_json(name: &str, answer: &QueriedPose, ros_time_offset_ns: i64) -> String {
+    let e = &answer.estimate;
     let t = e.pose.translation.vector;
     let q = e.pose.rotation.quaternion().coords;
     let stamp_ns = e
@@ -198,6 +247,7 @@ pub fn answer_json(name: &str, e: &PoseEstimate, ros_time_offset_ns: i64) -> Str
         // The f32's shortest decimal form (0.7444, not 0.7444000244140625).
         "quality": e.quality.to_string().parse::<f64>().unwrap_or(f64::NAN),
         "state": e.state.as_str(),
+        "revised": answer.revised,
     })
     .to_string()
 }
@@ -232,12 +282,12 @@ impl QueryContext {
     /// The answer to a query with `parameters`: the JSON pose, or the reason for refusing it.
     pub(super) fn answer(&self, parameters: &str) -> Result<String, PoseQueryError> {
         let t_us = requested_time(parameters, self.ros_time_offset_ns)?;
-        let estimate = match self.recent.lock() {
+        let answer = match self.recent.lock() {
             Ok(recent) => recent.at(self.object, t_us)?,
             // A publishing thread that panicked holding the lock left no poses to trust.
             Err(_) => return Err(PoseQueryError::NoPoseYet),
         };
-        Ok(answer_json(&self.name, &estimate, self.ros_time_offset_ns))
+        Ok(answer_json(&self.name, &answer, self.ros_time_offset_ns))
     }
 
     /// Answers `query` on zenoh (a reply, or an error reply naming the problem) and counts it.
@@ -294,6 +344,51 @@ mod tests {
         }
     }
 
+    fn published(estimate: PoseEstimate) -> QueriedPose {
+        QueriedPose {
+            estimate,
+            revised: false,
+        }
+    }
+
+    #[test]
+    fn a_revised_tick_is_answered_as_revised_and_the_others_are_not() {
+        let mut recent = RecentPoses::new(1);
+        for (k, t) in [0, 8_333, 16_667, 25_000].into_iter().enumerate() {
+            recent.record(&estimate(0, t, 0.1 * k as f64, TrackingState::Degraded));
+        }
+        // The tracker tracked 16_667 again: better and tracking.
+        let better = estimate(0, 16_667, 0.25, TrackingState::Tracking);
+        assert!(recent.revise(&better));
+        assert!(
+            !recent.revise(&better),
+            "the same pose again is no revision"
+        );
+        assert!(
+            !recent.revise(&estimate(0, 16_000, 0.3, TrackingState::Tracking)),
+            "not a kept time"
+        );
+        assert!(
+            !recent.revise(&estimate(3, 16_667, 0.3, TrackingState::Tracking)),
+            "no such object"
+        );
+        let at = recent.at(0, 16_667).unwrap();
+        assert!(at.revised);
+        assert_eq!(at.estimate.pose, better.pose);
+        assert_eq!(at.estimate.state, TrackingState::Tracking);
+        // Between a revised tick and another: revised; between two published ones: not.
+        assert!(recent.at(0, 20_000).unwrap().revised);
+        assert!(recent.at(0, 10_000).unwrap().revised);
+        assert!(!recent.at(0, 4_000).unwrap().revised);
+        assert!(!recent.at(0, 25_000).unwrap().revised);
+        // A record at a later time keeps the revision of the earlier ones.
+        recent.record(&estimate(0, 33_333, 0.5, TrackingState::Tracking));
+        assert!(recent.at(0, 16_667).unwrap().revised);
+        let v: serde_json::Value =
+            serde_json::from_str(&answer_json("mug", &recent.at(0, 16_667).unwrap(), 0)).unwrap();
+        assert_eq!(v["revised"], true);
+    }
+
     #[test]
     fn the_time_comes_from_t_us_or_stamp_ns() {
         assert_eq!(requested_time("t_us=1234", 0), Ok(1234));
@@ -343,13 +438,13 @@ mod tests {
         }
         // One pose: its own, at its time and up to a period after.
         let first = estimate(0, 0, 0.0, TrackingState::Tracking).pose;
-        assert_eq!(recent.at(0, 1_000).unwrap().pose, first);
-        assert_eq!(recent.at(0, 2_000).unwrap().pose, first);
+        assert_eq!(recent.at(0, 1_000).unwrap().estimate.pose, first);
+        assert_eq!(recent.at(0, 2_000).unwrap().estimate.pose, first);
         for object in [0, 1] {
             recent.record(&estimate(object, 9_000, 0.4, TrackingState::Degraded));
             recent.record(&estimate(object, 17_000, 0.8, TrackingState::Tracking));
         }
-        let mid = recent.at(0, 5_000).unwrap();
+        let mid = recent.at(0, 5_000).unwrap().estimate;
         assert!((mid.pose.rotation.angle() - 0.2).abs() < 1e-9, "{mid:?}");
         assert_eq!(mid.t_us, 5_000);
         assert_eq!(mid.state, TrackingState::Degraded, "the worse of the two");
@@ -358,21 +453,24 @@ mod tests {
             "the lower of the two: {}",
             mid.quality
         );
-        let line = recent.at(1, 5_000).unwrap();
+        let line = recent.at(1, 5_000).unwrap().estimate;
         assert!((line.pose.translation.x - 0.2).abs() < 1e-12, "{line:?}");
-        let at_tick = recent.at(1, 9_000).unwrap();
+        let at_tick = recent.at(1, 9_000).unwrap().estimate;
         assert!((at_tick.pose.translation.x - 0.4).abs() < 1e-12);
-        assert_eq!(recent.at(0, 17_000).unwrap().state, TrackingState::Tracking);
+        assert_eq!(
+            recent.at(0, 17_000).unwrap().estimate.state,
+            TrackingState::Tracking
+        );
         // Past the latest: carried on at the last two poses' motion, and no longer `tracking`.
         let t_ahead = 17_000 + MAX_EXTRAPOLATION_US;
         let expected = 0.8 + 0.4 * MAX_EXTRAPOLATION_US as f64 / 8_000.0;
-        let ahead = recent.at(1, t_ahead).unwrap();
+        let ahead = recent.at(1, t_ahead).unwrap().estimate;
         assert!(
             (ahead.pose.translation.x - expected).abs() < 1e-9,
             "{ahead:?}"
         );
         assert_eq!(ahead.state, TrackingState::Degraded);
-        let turned = recent.at(0, t_ahead).unwrap();
+        let turned = recent.at(0, t_ahead).unwrap().estimate;
         assert!(
             (turned.pose.rotation.angle() - expected).abs() < 1e-9,
             "{turned:?}"
@@ -418,7 +516,7 @@ mod tests {
         assert!(recent.at(0, oldest_us).is_ok());
         // A tracker reset to an earlier time: the poses after it are gone.
         recent.record(&estimate(0, 10_050, 0.5, TrackingState::Lost));
-        let latest = recent.at(0, 10_050).unwrap();
+        let latest = recent.at(0, 10_050).unwrap().estimate;
         assert_eq!(latest.state, TrackingState::Lost);
         assert!(recent.at(0, 10_050 + MAX_EXTRAPOLATION_US + 1).is_err());
         assert!(recent.objects[0].capacity() >= RECENT_TICKS);
@@ -427,13 +525,14 @@ mod tests {
     #[test]
     fn the_answer_is_json_with_the_pose_on_both_clocks() {
         let e = estimate(0, 1_500, 0.25, TrackingState::Tracking);
-        let json = answer_json("mug", &e, 1_000_000);
+        let json = answer_json("mug", &published(e), 1_000_000);
         let v: serde_json::Value = serde_json::from_str(&json).expect("valid JSON");
         assert_eq!(v["object"], "mug");
         assert_eq!(v["t_us"], 1_500);
         assert_eq!(v["stamp_ns"], 2_500_000);
         assert_eq!(v["position"][0], 0.25);
         assert_eq!(v["state"], "tracking");
+        assert_eq!(v["revised"], false);
         assert!(json.contains("\"quality\":0.75"), "{json}");
         let q: Vec<f64> = (0..4)
             .map(|i| v["orientation"][i].as_f64().unwrap())
@@ -444,7 +543,7 @@ mod tests {
         );
         let overflow = answer_json(
             "mug",
-            &estimate(0, i64::MAX / 10, 0.0, TrackingState::Lost),
+            &published(estimate(0, i64::MAX / 10, 0.0, TrackingState::Lost)),
             0,
         );
         let v: serde_json::Value = serde_json::from_str(&overflow).expect("valid JSON");
@@ -453,7 +552,7 @@ mod tests {
         let mut broken = estimate(0, 0, 0.0, TrackingState::Lost);
         broken.quality = f32::NAN;
         let v: serde_json::Value =
-            serde_json::from_str(&answer_json("mug", &broken, 0)).expect("valid JSON");
+            serde_json::from_str(&answer_json("mug", &published(broken), 0)).expect("valid JSON");
         assert!(v["quality"].is_null());
         assert_eq!(v["state"], "lost");
     }
