@@ -77,6 +77,33 @@ fn eval_bad_inputs() {
         ],
         "no-recording",
     );
+    // Revised estimates: a missing or malformed file is named before anything is scored.
+    let revised = d.join("poses.revised.csv");
+    fails_with(
+        &[
+            "eval",
+            "--pred",
+            good.to_str().unwrap(),
+            "--revised",
+            revised.to_str().unwrap(),
+            "--gt",
+            no_rec.to_str().unwrap(),
+        ],
+        "cannot read revised estimates",
+    );
+    std::fs::write(&revised, "t_us,object\n").unwrap();
+    fails_with(
+        &[
+            "eval",
+            "--pred",
+            good.to_str().unwrap(),
+            "--revised",
+            revised.to_str().unwrap(),
+            "--gt",
+            no_rec.to_str().unwrap(),
+        ],
+        "poses.revised.csv",
+    );
 }
 
 #[test]

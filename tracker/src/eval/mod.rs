@@ -25,8 +25,8 @@ pub use frame::{
 };
 pub use kdtree::KdTree;
 pub use pose_csv::{
-    BOP_CSV_HEADER, BopRow, POSE_CSV_HEADER, PoseCsvError, PoseRecord, PoseRow, format_bop_csv,
-    format_pose_csv, parse_pose_csv,
+    BOP_CSV_HEADER, BopRow, POSE_CSV_HEADER, PoseCsvError, PoseRecord, PoseRow, apply_revisions,
+    format_bop_csv, format_pose_csv, parse_pose_csv,
 };
 pub use pose_error::{add, add_s, mspd, mssd};
 pub use recall::{

@@ -102,6 +102,24 @@ pub fn parse_pose_csv(text: &str) -> Result<Vec<PoseRecord>, PoseCsvError> {
     Ok(out)
 }
 
+/// Applies revised estimates (the runtime's `<name>.revised.csv`) to published ones: each published row whose
+/// object and time a revised row has takes the last such revised row. Returns how many published rows changed
+/// hands; revised rows of times not published are ignored.
+pub fn apply_revisions(published: &mut [PoseRecord], revised: &[PoseRecord]) -> usize {
+    let mut last = std::collections::HashMap::new();
+    for r in revised {
+        last.insert((r.object.as_str(), r.t_us), r);
+    }
+    let mut applied = 0;
+    for p in published.iter_mut() {
+        if let Some(r) = last.get(&(p.object.as_str(), p.t_us)) {
+            *p = (*r).clone();
+            applied += 1;
+        }
+    }
+    applied
+}
+
 /// One row of the tracker output CSV, without its newline, as every writer of the format writes it: numbers in
 /// Rust's shortest round-trip formatting, the quality as the tracker's `f32`.
 #[derive(Debug, Clone, Copy)]
@@ -284,6 +302,28 @@ mod tests {
             // The quality is written as the tracker's f32 (shortest form), so it reads back as that f32.
             prop_assert_eq!(b.quality as f32, quality);
         }
+    }
+
+    #[test]
+    fn the_last_revision_of_a_tick_replaces_its_published_row() {
+        let row = |t_us, object: &str, x: f64| PoseRecord {
+            t_us,
+            object: object.into(),
+            pose: Isometry3::new(Vector3::new(x, 0.0, 0.5), Vector3::zeros()),
+            quality: 0.5,
+            state: "tracking".into(),
+        };
+        let mut published = vec![row(1, "can", 0.0), row(1, "mug", 0.0), row(2, "can", 0.0)];
+        let revised = [
+            row(1, "can", 0.1),
+            row(1, "can", 0.2),
+            row(3, "can", 0.3),
+            row(2, "box", 0.4),
+        ];
+        assert_eq!(apply_revisions(&mut published, &revised), 1);
+        assert_eq!(published[0].pose.translation.x, 0.2);
+        assert_eq!(published[1].pose.translation.x, 0.0);
+        assert_eq!(published[2].pose.translation.x, 0.0);
     }
 
     #[test]

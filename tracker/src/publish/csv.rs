@@ -1,6 +1,8 @@
 //! The pose CSV file sink: every estimate as a row of the tracker output CSV
 //! (`t_us,object,x,y,z,qx,qy,qz,qw,quality,state`, [`crate::eval::POSE_CSV_HEADER`]), numbers at full precision
-//! (Rust's shortest round-trip formatting) so readers get the published `f64` values back exactly.
+//! (Rust's shortest round-trip formatting) so readers get the published `f64` values back exactly. The estimates
+//! the tracker revises after publishing them (tracked again from a late depth frame) go, in the same format, to
+//! a second file beside it, `<name>.revised.csv`, created at the first revision.
 
 use super::{PoseSink, PublishError, SinkCounters, TickPoses};
 use crate::eval::{POSE_CSV_HEADER, PoseRow};
@@ -15,6 +17,11 @@ pub struct CsvPoseSink {
     path: PathBuf,
     out: BufWriter<File>,
     counters: SinkCounters,
+    /// The revised estimates' file, once one came; the object names of the rows.
+    revised: Option<BufWriter<File>>,
+    objects: Vec<String>,
+    /// Revised estimates not written (the file could not be created or written).
+    revisions_failed: u64,
 }
 
 impl CsvPoseSink {
@@ -26,6 +33,18 @@ impl CsvPoseSink {
             message: format!("cannot write {}: {e}", path.display()),
         };
         let file = File::create(path).map_err(err)?;
+        // A previous run's revisions do not belong to this run's poses.
+        let revised = Self::revised_path(path);
+        match std::fs::remove_file(&revised) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => {
+                return Err(PublishError::Transport {
+                    sink: name.clone(),
+                    message: format!("cannot remove the previous {}: {e}", revised.display()),
+                });
+            }
+        }
         let mut out = BufWriter::with_capacity(64 * 1024, file);
         writeln!(out, "{POSE_CSV_HEADER}").map_err(err)?;
         Ok(Self {
@@ -33,7 +52,46 @@ impl CsvPoseSink {
             path: path.to_path_buf(),
             out,
             counters: SinkCounters::default(),
+            revised: None,
+            objects: Vec::new(),
+            revisions_failed: 0,
         })
+    }
+
+    /// The file of revised estimates beside `poses`: `poses.csv` -> `poses.revised.csv`.
+    pub fn revised_path(poses: &Path) -> PathBuf {
+        let stem = poses
+            .file_stem()
+            .map_or_else(|| "poses".into(), |s| s.to_string_lossy().into_owned());
+        poses.with_file_name(format!("{stem}.revised.csv"))
+    }
+
+    /// Revised estimates that could not be written, so far (a warning names the first failure).
+    pub fn revisions_failed(&self) -> u64 {
+        self.revisions_failed
+    }
+
+    fn write_revised(&mut self, revised: &[crate::track::PoseEstimate]) -> std::io::Result<()> {
+        let out = match &mut self.revised {
+            Some(out) => out,
+            None => {
+                let file = File::create(Self::revised_path(&self.path))?;
+                let mut out = BufWriter::with_capacity(16 * 1024, file);
+                writeln!(out, "{POSE_CSV_HEADER}")?;
+                self.revised.insert(out)
+            }
+        };
+        for e in revised {
+            let row = PoseRow {
+                t_us: e.t_us,
+                object: self.objects.get(e.object).map_or("?", String::as_str),
+                pose: &e.pose,
+                quality: e.quality,
+                state: e.state.as_str(),
+            };
+            writeln!(out, "{row}")?;
+        }
+        Ok(())
     }
 
     /// The file written.
@@ -55,6 +113,9 @@ impl PoseSink for CsvPoseSink {
     }
 
     fn publish(&mut self, poses: &TickPoses<'_>) -> Result<(), PublishError> {
+        if self.objects.len() != poses.objects.len() {
+            self.objects = poses.objects.to_vec();
+        }
         for e in poses.estimates {
             let row = PoseRow {
                 t_us: e.t_us,
@@ -80,7 +141,30 @@ impl PoseSink for CsvPoseSink {
     }
 
     fn flush(&mut self) -> Result<(), PublishError> {
-        self.out.flush().map_err(|e| self.io_error(e))
+        self.out.flush().map_err(|e| self.io_error(e))?;
+        if let Some(out) = &mut self.revised {
+            let path = Self::revised_path(&self.path);
+            out.flush().map_err(|e| PublishError::Transport {
+                sink: self.name.clone(),
+                message: format!("cannot write {}: {e}", path.display()),
+            })?;
+        }
+        Ok(())
+    }
+
+    /// Appends the revised estimates to `<name>.revised.csv` (a tick may appear there more than once: its last
+    /// row is the tracker's final estimate).
+    fn revise(&mut self, revised: &[crate::track::PoseEstimate]) {
+        if let Err(e) = self.write_revised(revised) {
+            if self.revisions_failed == 0 {
+                eprintln!(
+                    "warning: {}: cannot write {}: {e} (further failures are counted)",
+                    self.name,
+                    Self::revised_path(&self.path).display()
+                );
+            }
+            self.revisions_failed += revised.len() as u64;
+        }
     }
 }
 
@@ -97,6 +181,7 @@ mod tests {
     fn rows_read_back_exactly() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("poses.csv");
+        std::fs::write(dir.path().join("poses.revised.csv"), "from a previous run").unwrap();
         let mut sink = CsvPoseSink::create(&path).unwrap();
         let pose = Isometry3::from_parts(
             Translation3::new(0.1 + 0.2, -1.0 / 3.0, 0.654_321_987_654_321),
@@ -143,6 +228,34 @@ mod tests {
         assert_eq!(rows[0].pose.translation.vector, pose.translation.vector);
         assert!((rows[0].pose.rotation.coords - pose.rotation.coords).norm() < 1e-15);
         assert_eq!(rows[1].object, "mug");
+
+        // Revisions go beside it, to a file made at the first one; the published rows stay as they were.
+        let revised_path = CsvPoseSink::revised_path(&path);
+        assert_eq!(revised_path, dir.path().join("poses.revised.csv"));
+        assert!(
+            !revised_path.exists(),
+            "the stale file of a previous run was removed"
+        );
+        let better = PoseEstimate {
+            quality: 0.75,
+            state: TrackingState::Tracking,
+            ..estimates[0]
+        };
+        sink.revise(&[better]);
+        sink.revise(&[PoseEstimate {
+            quality: 0.5,
+            ..better
+        }]);
+        sink.flush().unwrap();
+        let revised = parse_pose_csv(&std::fs::read_to_string(&revised_path).unwrap()).unwrap();
+        assert_eq!(revised.len(), 2);
+        assert_eq!((revised[0].object.as_str(), revised[0].t_us), ("can", 8833));
+        assert_eq!((revised[0].quality, revised[1].quality), (0.75, 0.5));
+        assert_eq!(
+            parse_pose_csv(&std::fs::read_to_string(&path).unwrap()).unwrap(),
+            rows
+        );
+        assert_eq!(sink.revisions_failed(), 0);
     }
 
     #[test]

@@ -139,10 +139,12 @@ pub fn run(args: &DemoArgs) -> Result<()> {
                 "accuracy:        not scored (stopped early; the poses cover only part of the sequence)"
             );
         } else {
-            let rows = session::accuracy(&recording, csv)?;
-            session::print_accuracy(&rows, &config.tracker.method);
+            session::print_run_accuracy(&recording, &summary, &config.tracker.method)?;
         }
         println!("poses:           {}", csv.display());
+        if let Some(revised) = session::revised_csv(&summary) {
+            println!("revised poses:   {}", revised.display());
+        }
         if let Some(p) = write_overlay_strip(&recording, csv, &out)? {
             println!("overlay:         {}", p.display());
         }

@@ -7,8 +7,8 @@ use drivers::recording::Recording;
 use serde_json::{Map, json};
 use std::path::PathBuf;
 use tracker::eval::{
-    AucLimit, BopRow, PoseTrack, Summary, evaluate_object, format_bop_csv, ground_truth_objects,
-    parse_pose_csv, recording_ticks,
+    AucLimit, BopRow, PoseTrack, Summary, apply_revisions, evaluate_object, format_bop_csv,
+    ground_truth_objects, parse_pose_csv, recording_ticks,
 };
 
 /// AUC threshold convention.
@@ -37,6 +37,11 @@ pub struct EvalArgs {
     /// Tracker output CSV.
     #[arg(long, value_name = "CSV")]
     pub pred: PathBuf,
+    /// Revised estimates to apply first (a run's `poses.revised.csv`: ticks the tracker tracked again from late
+    /// depth frames; the last row of a tick wins), to score what the pose queries answer rather than what was
+    /// published.
+    #[arg(long, value_name = "CSV")]
+    pub revised: Option<PathBuf>,
     /// Recording directory with groundtruth.csv.
     #[arg(long, value_name = "RECORDING")]
     pub gt: PathBuf,
@@ -59,7 +64,19 @@ fn summary_json(s: &Summary) -> serde_json::Value {
 pub fn run(args: &EvalArgs) -> Result<()> {
     let text = std::fs::read_to_string(&args.pred)
         .with_context(|| format!("cannot read predictions {}", args.pred.display()))?;
-    let preds = parse_pose_csv(&text).with_context(|| format!("{}", args.pred.display()))?;
+    let mut preds = parse_pose_csv(&text).with_context(|| format!("{}", args.pred.display()))?;
+    if let Some(path) = &args.revised {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read revised estimates {}", path.display()))?;
+        let revised = parse_pose_csv(&text).with_context(|| format!("{}", path.display()))?;
+        let applied = apply_revisions(&mut preds, &revised);
+        println!(
+            "{applied} of {} predictions revised from {} ({} rows)",
+            preds.len(),
+            path.display(),
+            revised.len()
+        );
+    }
     let rec = Recording::open(&args.gt)?;
     let objects = ground_truth_objects(&rec)?;
     for o in preds.iter().map(|p| &p.object) {

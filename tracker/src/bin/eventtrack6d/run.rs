@@ -50,11 +50,13 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let summary = session::execute(&config, expected)?;
     println!("{summary}");
     let score = !args.no_accuracy && !summary.stopped;
-    if let (Some(rec), Some(csv), true) = (&recording, &summary.outputs.csv, score)
+    if let (Some(rec), Some(_), true) = (&recording, &summary.outputs.csv, score)
         && Recording::open(rec).is_ok_and(|r| r.ground_truth.is_some())
     {
-        let rows = session::accuracy(rec, csv)?;
-        session::print_accuracy(&rows, &config.tracker.method);
+        session::print_run_accuracy(rec, &summary, &config.tracker.method)?;
+    }
+    if let Some(revised) = session::revised_csv(&summary) {
+        println!("revised poses:   {}", revised.display());
     }
     session::print_latency_log(&summary);
     Ok(())

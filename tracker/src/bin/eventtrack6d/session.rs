@@ -62,11 +62,18 @@ pub fn expected_ticks(rec: &Recording) -> Option<u64> {
 pub fn accuracy(
     recording: &Path,
     poses_csv: &Path,
+    revised_csv: Option<&Path>,
 ) -> Result<Vec<(String, tracker::eval::Summary)>> {
     let rec = Recording::open(recording)?;
-    let text = std::fs::read_to_string(poses_csv)
-        .with_context(|| format!("cannot read {}", poses_csv.display()))?;
-    let preds = parse_pose_csv(&text).with_context(|| poses_csv.display().to_string())?;
+    let read = |path: &Path| -> Result<Vec<tracker::eval::PoseRecord>> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        parse_pose_csv(&text).with_context(|| path.display().to_string())
+    };
+    let mut preds = read(poses_csv)?;
+    if let Some(path) = revised_csv {
+        tracker::eval::apply_revisions(&mut preds, &read(path)?);
+    }
     let ticks = recording_ticks(&rec)?;
     let mut out = Vec::new();
     for object in ground_truth_objects(&rec)? {
@@ -75,6 +82,34 @@ pub fn accuracy(
         out.push((object, seq.summary(false, AucLimit::Diameter)));
     }
     Ok(out)
+}
+
+/// The revised estimates' file a run wrote beside its pose CSV, if the tracker revised any.
+pub fn revised_csv(summary: &Summary) -> Option<std::path::PathBuf> {
+    let csv = summary.outputs.csv.as_ref()?;
+    let path = tracker::publish::csv::CsvPoseSink::revised_path(csv);
+    path.is_file().then_some(path)
+}
+
+/// Prints the accuracy of the published poses, and with the revised ones applied when the run revised any.
+pub fn print_run_accuracy(recording: &Path, summary: &Summary, method: &str) -> Result<()> {
+    let Some(csv) = &summary.outputs.csv else {
+        return Ok(());
+    };
+    print_accuracy(&accuracy(recording, csv, None)?, method);
+    if let Some(revised) = revised_csv(summary) {
+        println!(
+            "accuracy with the revised poses ({}; what the pose queries answer):",
+            revised.display()
+        );
+        for (o, s) in accuracy(recording, csv, Some(&revised))? {
+            println!(
+                "  {o:<14} ADD-S {:6.2}  ADD {:6.2}  AR {:6.2}  ({} ticks)",
+                s.add_s, s.add, s.ar, s.frames
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Prints the accuracy table.
