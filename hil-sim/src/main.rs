@@ -77,7 +77,7 @@ enum Command {
         out: PathBuf,
         /// Sequences generated at once (default: one per available core); each renders on one thread and
         /// simulates the event sensor on another. The recordings do not depend on it; memory grows by about
-        /// 150 MiB per job.
+        /// 160 MiB per job.
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
         jobs: Option<u32>,
     },

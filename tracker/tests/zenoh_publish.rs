@@ -480,7 +480,7 @@ fn pose_queries_answer_at_any_time_between_published_ticks() {
         (json["position"][0].as_f64().unwrap() - 0.05).abs() < 1e-12,
         "{json}"
     );
-    assert_eq!(json["quality"], 0.9);
+    assert_eq!(json["quality"], 0.8, "quality stays as published");
 }
 
 #[test]

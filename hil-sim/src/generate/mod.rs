@@ -29,7 +29,8 @@ use stage::{Built, build, copy_user_obj};
 use std::sync::mpsc;
 use steps::{StepPlan, render_steps};
 
-/// Steps rendered ahead of the sensor at most (each holds one rendered region).
+/// Steps queued between rendering and the sensor at most (each holds one rendered region); with the step each
+/// half works on, rendering runs at most 6 steps ahead of the sensor.
 const STEPS_IN_FLIGHT: usize = 4;
 
 /// The event sensor's log intensity over the whole image at `t_s`, exactly as the generator computes it

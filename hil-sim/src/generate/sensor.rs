@@ -1,7 +1,8 @@
 //! The sensors' half of generation, on its own thread: it composites each rendered region over the static
 //! background, applies the optics and the logarithm, runs ESIM, renders and measures the depth frames, and writes
-//! events, trigger edges and depth frames in time order. Rendering, the other half, runs ahead on the calling thread. The recording is the same byte
-//! for byte as with both halves on one thread: each half does the same work on the same data in the same order.
+//! events, trigger edges and depth frames in time order. Rendering, the other half, runs ahead on the calling
+//! thread. The recording is the same byte for byte as with both halves on one thread: each half does the same
+//! work on the same data in the same order.
 
 use super::GenerateError;
 use super::optics::optics_log;

@@ -20,8 +20,8 @@ pub struct CsvPoseSink {
     /// The revised estimates' file, once one came; the object names of the rows.
     revised: Option<BufWriter<File>>,
     objects: Vec<String>,
-    /// Revised estimates not written (the file could not be created or written).
-    revisions_failed: u64,
+    /// Whether a revised estimate could not be written (warned once; each one counts as failed).
+    revision_failed: bool,
 }
 
 impl CsvPoseSink {
@@ -54,7 +54,7 @@ impl CsvPoseSink {
             counters: SinkCounters::default(),
             revised: None,
             objects: Vec::new(),
-            revisions_failed: 0,
+            revision_failed: false,
         })
     }
 
@@ -64,11 +64,6 @@ impl CsvPoseSink {
             .file_stem()
             .map_or_else(|| "poses".into(), |s| s.to_string_lossy().into_owned());
         poses.with_file_name(format!("{stem}.revised.csv"))
-    }
-
-    /// Revised estimates that could not be written, so far (a warning names the first failure).
-    pub fn revisions_failed(&self) -> u64 {
-        self.revisions_failed
     }
 
     fn write_revised(&mut self, revised: &[crate::track::PoseEstimate]) -> std::io::Result<()> {
@@ -156,14 +151,15 @@ impl PoseSink for CsvPoseSink {
     /// row is the tracker's final estimate).
     fn revise(&mut self, revised: &[crate::track::PoseEstimate]) {
         if let Err(e) = self.write_revised(revised) {
-            if self.revisions_failed == 0 {
+            if !self.revision_failed {
+                self.revision_failed = true;
                 eprintln!(
                     "warning: {}: cannot write {}: {e} (further failures are counted)",
                     self.name,
                     Self::revised_path(&self.path).display()
                 );
             }
-            self.revisions_failed += revised.len() as u64;
+            self.counters.failed += revised.len() as u64;
         }
     }
 }
@@ -255,7 +251,7 @@ mod tests {
             parse_pose_csv(&std::fs::read_to_string(&path).unwrap()).unwrap(),
             rows
         );
-        assert_eq!(sink.revisions_failed(), 0);
+        assert_eq!(sink.counters().failed, 0);
     }
 
     #[test]

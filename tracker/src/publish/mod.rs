@@ -75,9 +75,10 @@ pub trait PoseSink: Send {
     fn flush(&mut self) -> Result<(), PublishError> {
         Ok(())
     }
-    /// Estimates of ticks already published that the tracker has since revised: it tracked them again from a
-    /// depth frame that arrived after them. A sink that keeps published poses to answer from (the zenoh pose
-    /// queries) takes the revised ones; what was sent cannot be taken back, so by default nothing happens.
+    /// Estimates of ticks already published whose pose the tracker has since revised: it tracked them again from
+    /// a depth frame that arrived after them (quality and state are as published). A sink that keeps published
+    /// poses to answer from (the zenoh pose queries) takes the revised ones; what was sent cannot be taken back,
+    /// so by default nothing happens.
     fn revise(&mut self, revised: &[PoseEstimate]) {
         let _ = revised;
     }

@@ -3,17 +3,27 @@
 //! ([`PoseSink::revise`]), so that the zenoh pose queries answer with them.
 
 use crate::publish::PoseSink;
-use crate::track::{PoseEstimate, PoseTracker};
+use crate::track::{MAX_DEPTH_AGE_LIMIT_MS, PoseEstimate, PoseTracker};
 use std::collections::VecDeque;
 
-/// Published ticks remembered, at most: 266 ms at 120 Hz, beyond any depth frame the tracker still uses.
-const REMEMBERED_TICKS: usize = 32;
+/// Published ticks remembered, at most: 533 ms at 120 Hz, beyond the oldest depth frame the tracker may be
+/// configured to use ([`MAX_DEPTH_AGE_LIMIT_MS`]).
+const REMEMBERED_TICKS: usize = 64;
 
-/// The times of the latest published ticks, and what the tracker reported it tracked again.
+/// The tracker starts tracking again from the tick within this much of a frame's exposure (half a 120 Hz
+/// period), so that tick is revised too, microseconds.
+const EXPOSURE_TICK_US: i64 = 4_200;
+
+const _: () =
+    assert!(REMEMBERED_TICKS as f64 * 8_333.0 >= MAX_DEPTH_AGE_LIMIT_MS * 1_000.0 + 8_333.0);
+
+/// The latest published estimates, and what the tracker reported it tracked again.
 #[derive(Debug)]
 pub(super) struct PoseRevisions {
-    /// Times of the latest published ticks, oldest first, microseconds.
-    ticks: VecDeque<i64>,
+    /// The estimates of the latest [`REMEMBERED_TICKS`] published ticks, oldest first.
+    published: VecDeque<PoseEstimate>,
+    /// Objects per tick.
+    objects: usize,
     /// Scratch for the revised estimates (kept between calls: no allocation in steady state).
     revised: Vec<PoseEstimate>,
     /// The tracker's count of late frames it tracked again from, when last looked at.
@@ -25,24 +35,37 @@ pub(super) struct PoseRevisions {
 impl PoseRevisions {
     /// Room for `objects` objects, allocated now.
     pub(super) fn new(objects: usize) -> Self {
+        let capacity = REMEMBERED_TICKS * objects.max(1);
         Self {
-            ticks: VecDeque::with_capacity(REMEMBERED_TICKS),
-            revised: Vec::with_capacity(REMEMBERED_TICKS * objects.max(1)),
+            published: VecDeque::with_capacity(capacity),
+            objects: objects.max(1),
+            revised: Vec::with_capacity(capacity),
             retracked_frames: 0,
             handed: 0,
         }
     }
 
-    /// Remembers that the tick at `t_us` was published.
-    pub(super) fn published(&mut self, t_us: i64) {
-        if self.ticks.len() == REMEMBERED_TICKS {
-            self.ticks.pop_front();
+    /// Remembers one tick's published estimates. Estimates at or after their time (a clock that went back) are
+    /// forgotten first.
+    pub(super) fn published(&mut self, estimates: &[PoseEstimate]) {
+        let Some(t_us) = estimates.first().map(|e| e.t_us) else {
+            return;
+        };
+        while self.published.back().is_some_and(|e| e.t_us >= t_us) {
+            self.published.pop_back();
         }
-        self.ticks.push_back(t_us);
+        for e in estimates {
+            if self.published.len() == REMEMBERED_TICKS * self.objects {
+                self.published.pop_front();
+            }
+            self.published.push_back(*e);
+        }
     }
 
-    /// After `tracker` worked on the depth frame exposed at `exposure_us`: if it tracked ticks again from it,
-    /// hands every object's estimate at each published tick since the exposure to `sinks`. Returns how many.
+    /// Looks whether `tracker` tracked ticks again since the last look, from the depth frame exposed at
+    /// `exposure_us`; if so, hands the revised estimate of every published tick since the exposure to `sinks`.
+    /// Only the pose is revised: quality and state stay as published (the tracker keeps no per-tick quality).
+    /// Returns how many estimates were handed.
     pub(super) fn after_depth(
         &mut self,
         exposure_us: i64,
@@ -57,11 +80,13 @@ impl PoseRevisions {
         }
         self.retracked_frames = counters.late_frames_retracked;
         self.revised.clear();
-        for &t_us in self.ticks.iter().filter(|&&t| t >= exposure_us) {
-            for object in 0..tracker.objects().len() {
-                if let Some(estimate) = tracker.pose_at(object, t_us) {
-                    self.revised.push(estimate);
-                }
+        let since = exposure_us.saturating_sub(EXPOSURE_TICK_US);
+        for e in self.published.iter().filter(|e| e.t_us >= since) {
+            if let Some(now) = tracker.pose_at(e.object, e.t_us) {
+                self.revised.push(PoseEstimate {
+                    pose: now.pose,
+                    ..*e
+                });
             }
         }
         if !self.revised.is_empty() {
@@ -105,7 +130,17 @@ mod tests {
         fn push_depth(&mut self, _: i64, _: &mut DepthFrame) {
             self.retracked += 1;
         }
-        fn tick(&mut self, _: &Tick, _: &mut Vec<PoseEstimate>) {}
+        fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
+            for object in 0..self.names.len() {
+                out.push(PoseEstimate {
+                    object,
+                    t_us: tick.t_us,
+                    pose: Isometry3::identity(),
+                    quality: 0.25,
+                    state: TrackingState::Degraded,
+                });
+            }
+        }
         fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
             (object < 2).then(|| PoseEstimate {
                 object,
@@ -152,39 +187,124 @@ mod tests {
         let got = Arc::new(Mutex::new(Vec::new()));
         let mut sinks: Vec<Box<dyn PoseSink>> = vec![Box::new(Revisions(got.clone()))];
         let mut revisions = PoseRevisions::new(2);
-        for k in 0..40 {
-            revisions.published(500 + k * 8_333);
+        let published = |t_us: i64, object: usize| PoseEstimate {
+            object,
+            t_us,
+            pose: Isometry3::identity(),
+            quality: 0.25,
+            state: TrackingState::Degraded,
+        };
+        for k in 0..76 {
+            let t = 500 + k * 8_333;
+            revisions.published(&[published(t, 0), published(t, 1)]);
         }
         // Nothing tracked again: nothing revised.
-        assert_eq!(revisions.after_depth(250_000, &tracker, &mut sinks), 0);
-        // Tracked again from the frame exposed at 300_000 us: the ticks at or after it (500 + 36..=39 x 8_333 us,
-        // all among the 32 remembered), each object once.
+        assert_eq!(revisions.after_depth(600_000, &tracker, &mut sinks), 0);
+        // Tracked again from the frame exposed at 601_000 us, 2.5 ms after the tick at 600_476 (where the tracker
+        // starts): that tick and the three after it (the last of the 64 remembered), each object once.
         let mut frame = DepthFrame {
             index: 9,
             width: 0,
             height: 0,
             depth_m: Vec::new(),
         };
-        tracker.push_depth(300_000, &mut frame);
-        assert_eq!(revisions.after_depth(300_000, &tracker, &mut sinks), 8);
+        tracker.push_depth(601_000, &mut frame);
+        assert_eq!(revisions.after_depth(601_000, &tracker, &mut sinks), 8);
         let got = got.lock().unwrap().clone();
         let times: Vec<(usize, i64)> = got.iter().map(|e| (e.object, e.t_us)).collect();
         assert_eq!(
             times,
             [
-                (0, 300_488),
-                (1, 300_488),
-                (0, 308_821),
-                (1, 308_821),
-                (0, 317_154),
-                (1, 317_154),
-                (0, 325_487),
-                (1, 325_487)
+                (0, 600_476),
+                (1, 600_476),
+                (0, 608_809),
+                (1, 608_809),
+                (0, 617_142),
+                (1, 617_142),
+                (0, 625_475),
+                (1, 625_475)
             ]
         );
-        assert!((got[0].pose.translation.x - 1.300_488).abs() < 1e-9);
+        // The pose is the tracker's; quality and state stay as published.
+        assert!((got[0].pose.translation.x - 1.600_476).abs() < 1e-9);
+        assert_eq!(
+            (got[0].quality, got[0].state),
+            (0.25, TrackingState::Degraded)
+        );
         assert_eq!(revisions.handed(), 8);
         // The same counters again: no second revision.
-        assert_eq!(revisions.after_depth(300_000, &tracker, &mut sinks), 0);
+        assert_eq!(revisions.after_depth(601_000, &tracker, &mut sinks), 0);
+        // A clock that went back forgets the ticks after it; 64 ticks of two objects are kept at most.
+        revisions.published(&[published(300_000, 0), published(300_000, 1)]);
+        assert!(revisions.published.iter().all(|e| e.t_us <= 300_000));
+        assert!(revisions.published.capacity() >= REMEMBERED_TICKS * 2);
+    }
+
+    #[test]
+    fn the_worker_hands_the_revisions_to_its_sinks_and_counts_them() {
+        use crate::runtime::health::Health;
+        use crate::runtime::queue::{Ingest, IngestQueue};
+        use crate::runtime::worker::Worker;
+        use drivers::timeline::{TimelineConfig, ideal_edges};
+        use std::time::Instant;
+
+        let cfg = TimelineConfig::default();
+        let names = vec!["a".to_string(), "b".to_string()];
+        let queue = Arc::new(IngestQueue::new(64, 16));
+        let health = Arc::new(Mutex::new(Health::new(&names, &["revisions".into()])));
+        let got = Arc::new(Mutex::new(Vec::new()));
+        let tracker = Retracking {
+            names: names.clone(),
+            retracked: 0,
+        };
+        let worker = Worker::new(
+            Box::new(tracker),
+            vec![Box::new(Revisions(got.clone()))],
+            cfg,
+            queue.clone(),
+            health.clone(),
+        );
+        let thread = std::thread::spawn(move || worker.run());
+        let edges = ideal_edges(&cfg, 1000, 16);
+        let rising: Vec<i64> = edges.iter().filter(|e| e.rising).map(|e| e.t_us).collect();
+        // The frame exposed at the fifth tick arrives after the ninth edge pair.
+        let exposure = rising[4];
+        for (k, e) in edges.iter().enumerate() {
+            queue.push(Ingest::Trigger {
+                edge: *e,
+                decoded_at: Instant::now(),
+            });
+            if k == 17 {
+                queue.push(Ingest::Depth {
+                    t_us: exposure,
+                    frame: Box::new(DepthFrame {
+                        index: 1,
+                        width: 0,
+                        height: 0,
+                        depth_m: Vec::new(),
+                    }),
+                });
+            }
+        }
+        queue.push(Ingest::End);
+        thread.join().unwrap();
+        let got = got.lock().unwrap().clone();
+        assert!(!got.is_empty(), "nothing revised");
+        assert!(got.iter().all(|e| e.t_us >= exposure), "{got:?}");
+        assert!(
+            got.iter().any(|e| e.t_us == exposure),
+            "the exposure's own tick is revised"
+        );
+        assert!(
+            got.iter()
+                .all(|e| (e.quality, e.state) == (0.25, TrackingState::Degraded))
+        );
+        assert_eq!(got.iter().filter(|e| e.object == 0).count(), got.len() / 2);
+        let h = health.lock().unwrap();
+        assert_eq!(h.poses_revised, got.len() as u64);
+        assert_eq!(
+            h.status_json("finished")["ingest"]["poses_revised"],
+            got.len() as u64
+        );
     }
 }

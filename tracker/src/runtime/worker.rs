@@ -121,6 +121,8 @@ pub struct Worker {
     reported_old_depth: bool,
     /// Published ticks, for handing the sinks what the tracker revises of them.
     revisions: PoseRevisions,
+    /// Exposure of the latest depth frame handed to the tracker.
+    latest_exposure_us: Option<i64>,
 }
 
 impl Worker {
@@ -157,6 +159,7 @@ impl Worker {
             depth_age_limit_us: None,
             reported_old_depth: false,
             revisions: PoseRevisions::new(objects_count),
+            latest_exposure_us: None,
         }
     }
 
@@ -309,6 +312,7 @@ impl Worker {
     /// when its work would delay the next tick, else at once ([`DepthArrival`]); records the work it took.
     fn hand_over_depth(&mut self, t_us: i64, mut frame: Box<drivers::recording::DepthFrame>) {
         let start = Instant::now();
+        self.latest_exposure_us = Some(t_us);
         let shed = self
             .arrival
             .should_shed(t_us, self.last_tick_us, self.last_waited);
@@ -330,8 +334,7 @@ impl Worker {
             self.tracker.push_depth(t_us, &mut frame);
             let work = start.elapsed();
             self.arrival.record(t_us, self.last_tick_us, work);
-            self.revisions
-                .after_depth(t_us, &*self.tracker, &mut self.sinks);
+            self.revise_published(t_us);
             Some(work)
         };
         let mut h = self.health();
@@ -340,6 +343,18 @@ impl Worker {
         h.depth_frames_deferred = self.arrival.deferred();
         if let Some(work) = work {
             h.depth_arrival.record(work);
+        }
+    }
+
+    /// Hands the sinks the estimates the tracker revised if it tracked published ticks again from the frame
+    /// exposed at `exposure_us`, and counts them.
+    fn revise_published(&mut self, exposure_us: i64) {
+        if self
+            .revisions
+            .after_depth(exposure_us, &*self.tracker, &mut self.sinks)
+            > 0
+        {
+            self.health().poses_revised = self.revisions.handed();
         }
     }
 
@@ -398,9 +413,12 @@ impl Worker {
                 o.t_us = Some(e.t_us);
             }
         }
-        h.poses_revised = self.revisions.handed();
         drop(h);
-        self.revisions.published(tick.t_us);
+        self.revisions.published(&self.estimates);
+        // A frame the tracker kept for this tick may have made it track the ticks before again.
+        if let Some(t_us) = self.latest_exposure_us {
+            self.revise_published(t_us);
+        }
         self.last_tick_us = Some(tick.t_us);
         self.last_waited = tick_start.saturating_duration_since(decoded_at);
         // The poses are out: start the next tick's work (its renders, and tracking again for a frame deferred)
@@ -411,8 +429,7 @@ impl Worker {
             let work = prepare_start.elapsed();
             self.arrival.record(t_us, self.last_tick_us, work);
             self.health().depth_arrival.record(work);
-            self.revisions
-                .after_depth(t_us, &*self.tracker, &mut self.sinks);
+            self.revise_published(t_us);
         }
         if let Some(log) = &mut self.latency_log {
             log.record(&TickTiming {

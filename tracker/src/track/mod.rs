@@ -19,7 +19,7 @@ mod redetect;
 mod validate;
 
 pub use bench_method::{InitNoise, TrackerMethod, recording_object, recording_rig, tracking_rig};
-pub use config::{DepthUse, QualityConfig, TrackerConfig, TrackingMethod};
+pub use config::{DepthUse, MAX_DEPTH_AGE_LIMIT_MS, QualityConfig, TrackerConfig, TrackingMethod};
 pub use depth_transport::DepthTransport;
 pub use estimate::{PoseEstimate, ReportedState, TrackingState};
 pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, TrackingRig};

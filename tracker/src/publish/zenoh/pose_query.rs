@@ -119,8 +119,9 @@ impl RecentPoses {
         });
     }
 
-    /// Replaces the kept pose of `e`'s object at exactly `e.t_us` with `e`, marked revised if it differs;
-    /// returns whether it did. A time or object not kept is ignored (no allocation).
+    /// Replaces the kept pose of `e`'s object at exactly `e.t_us` with `e`'s pose, marked revised if it differs
+    /// (quality and state stay as published); returns whether it did. A time or object not kept is ignored (no
+    /// allocation).
     pub fn revise(&mut self, e: &PoseEstimate) -> bool {
         let Some(kept) = self.objects.get_mut(e.object) else {
             return false;
@@ -129,12 +130,10 @@ impl RecentPoses {
         let Some(k) = kept.get_mut(i).filter(|k| k.t_us == e.t_us) else {
             return false;
         };
-        if (k.pose, k.quality, k.state) == (e.pose, e.quality, e.state) {
+        if k.pose == e.pose {
             return false;
         }
         k.pose = e.pose;
-        k.quality = e.quality;
-        k.state = e.state;
         k.revised = true;
         true
     }
@@ -357,9 +356,14 @@ mod tests {
         for (k, t) in [0, 8_333, 16_667, 25_000].into_iter().enumerate() {
             recent.record(&estimate(0, t, 0.1 * k as f64, TrackingState::Degraded));
         }
-        // The tracker tracked 16_667 again: better and tracking.
+        // The tracker tracked 16_667 again: another pose.
         let better = estimate(0, 16_667, 0.25, TrackingState::Tracking);
         assert!(recent.revise(&better));
+        let same_pose = PoseEstimate {
+            quality: f32::NAN,
+            ..better
+        };
+        assert!(!recent.revise(&same_pose), "only the pose is revised");
         assert!(
             !recent.revise(&better),
             "the same pose again is no revision"
@@ -375,7 +379,11 @@ mod tests {
         let at = recent.at(0, 16_667).unwrap();
         assert!(at.revised);
         assert_eq!(at.estimate.pose, better.pose);
-        assert_eq!(at.estimate.state, TrackingState::Tracking);
+        assert_eq!(
+            at.estimate.state,
+            TrackingState::Degraded,
+            "the state stays as published"
+        );
         // Between a revised tick and another: revised; between two published ones: not.
         assert!(recent.at(0, 20_000).unwrap().revised);
         assert!(recent.at(0, 10_000).unwrap().revised);

@@ -261,7 +261,16 @@ proptest::proptest! {
             Err(e) => {
                 let message = e.to_string();
                 proptest::prop_assert!(message.starts_with("test.toml: "), "{}", message);
-                proptest::prop_assert!(message.len() > "test.toml: ".len() + 5, "{}", message);
+                // A malformed or out-of-range value names its key (and a parse error its line).
+                match &e {
+                    ConfigError::Parse { line, key, .. } => {
+                        proptest::prop_assert!(!key.is_empty() || *line > 0, "{}", message);
+                    }
+                    ConfigError::Invalid { key, .. } => {
+                        proptest::prop_assert!(!key.is_empty(), "{}", message);
+                    }
+                    _ => proptest::prop_assert!(message.len() > "test.toml: ".len() + 5, "{}", message),
+                }
             }
         }
     }
