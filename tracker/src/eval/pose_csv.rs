@@ -266,8 +266,10 @@ mod tests {
                 }
                 Err(e) => prop_assert!((2..=rows.len() + 1).contains(&e.line), "{}", e),
             }
-            if let Err(e) = parse_pose_csv(&String::from_utf8_lossy(&bytes)) {
-                prop_assert!(e.line >= 1 && !e.reason.is_empty());
+            let text = String::from_utf8_lossy(&bytes);
+            if let Err(e) = parse_pose_csv(&text) {
+                prop_assert!((1..=text.lines().count().max(1)).contains(&e.line), "{}", e);
+                prop_assert!(!e.reason.is_empty());
             }
         }
 
