@@ -77,14 +77,7 @@ impl CsvPoseSink {
             }
         };
         for e in revised {
-            let row = PoseRow {
-                t_us: e.t_us,
-                object: self.objects.get(e.object).map_or("?", String::as_str),
-                pose: &e.pose,
-                quality: e.quality,
-                state: e.state.as_str(),
-            };
-            writeln!(out, "{row}")?;
+            writeln!(out, "{}", pose_row(e, &self.objects))?;
         }
         Ok(())
     }
@@ -102,6 +95,17 @@ impl CsvPoseSink {
     }
 }
 
+/// The CSV row of `e`, its object named from `objects` (`?` if out of range).
+fn pose_row<'a>(e: &'a crate::track::PoseEstimate, objects: &'a [String]) -> PoseRow<'a> {
+    PoseRow {
+        t_us: e.t_us,
+        object: objects.get(e.object).map_or("?", String::as_str),
+        pose: &e.pose,
+        quality: e.quality,
+        state: e.state.as_str(),
+    }
+}
+
 impl PoseSink for CsvPoseSink {
     fn name(&self) -> &str {
         &self.name
@@ -112,14 +116,7 @@ impl PoseSink for CsvPoseSink {
             self.objects = poses.objects.to_vec();
         }
         for e in poses.estimates {
-            let row = PoseRow {
-                t_us: e.t_us,
-                object: poses.objects.get(e.object).map_or("?", String::as_str),
-                pose: &e.pose,
-                quality: e.quality,
-                state: e.state.as_str(),
-            };
-            let r = writeln!(self.out, "{row}");
+            let r = writeln!(self.out, "{}", pose_row(e, poses.objects));
             match r {
                 Ok(()) => self.counters.published += 1,
                 Err(err) => {
