@@ -235,6 +235,7 @@ fn ticks(c: &mut Criterion) {
     bench_paced(c, "cpu_ahead", &mut s, Some(&spent));
     match create_renderer(RendererKind::Gpu) {
         Ok(gpu) => {
+            eprintln!("gpu renderer: {}", gpu.device());
             let mut s = steady_tracker(rec.clone(), TrackerConfig::default(), gpu);
             bench_tracker(c, "gpu", &mut s);
             bench_cpu_of_tick(c, "gpu", &mut s);
