@@ -24,6 +24,10 @@ pub struct TimelineConfig {
     pub wide_width_us: i64,
     /// Largest deviation from the period estimate that is not counted as jitter, microseconds.
     pub jitter_tolerance_us: i64,
+    /// Most missing pulses in a row that are bridged with synthesised ticks. A longer gap (the trigger stopped, or
+    /// the event clock jumped in a damaged stream) is counted as a gap and not filled: ticks resume at the next
+    /// pulse, with the tick numbers the gap's length gives, so the depth schedule holds.
+    pub max_bridged_ticks: u64,
 }
 
 impl Default for TimelineConfig {
@@ -35,6 +39,7 @@ impl Default for TimelineConfig {
             narrow_width_us: 100,
             wide_width_us: 200,
             jitter_tolerance_us: 50,
+            max_bridged_ticks: 120,
         }
     }
 }
@@ -67,6 +72,10 @@ pub struct TimelineCounters {
     pub pulses: u64,
     /// Ticks synthesised where pulses were missing.
     pub missing: u64,
+    /// Gaps between pulses longer than [`TimelineConfig::max_bridged_ticks`]: not bridged.
+    pub gaps: u64,
+    /// Ticks the gaps left out (not synthesised).
+    pub unbridged: u64,
     /// Pulses dropped because they came far too early (less than half a period after a tick).
     pub extra: u64,
     /// Accepted pulses that deviated from the period estimate by more than the tolerance.
@@ -87,6 +96,7 @@ impl TimelineCounters {
     /// Sum of the irregularity counters (everything except `pulses` and `other_channel`).
     pub fn irregularities(&self) -> u64 {
         self.missing
+            + self.gaps
             + self.extra
             + self.jittered
             + self.phase_errors
@@ -200,10 +210,15 @@ impl TriggerTimeline {
                     self.period_us =
                         (self.period_us + 0.02 * residual).clamp(nominal * 0.99, nominal * 1.01);
                 }
-                for i in 1..k {
-                    let ti = last_t + (dt * i as f64 / k as f64).round() as i64;
-                    self.counters.missing += 1;
-                    self.emit(last_index + i, ti, None, true);
+                if k - 1 > self.config.max_bridged_ticks {
+                    self.counters.gaps += 1;
+                    self.counters.unbridged += k - 1;
+                } else {
+                    for i in 1..k {
+                        let ti = last_t + (dt * i as f64 / k as f64).round() as i64;
+                        self.counters.missing += 1;
+                        self.emit(last_index + i, ti, None, true);
+                    }
                 }
                 last_index + k
             }
@@ -372,6 +387,37 @@ mod tests {
         assert_eq!(ticks[8].depth_frame, Some(2));
         assert_eq!(ticks[12].depth_frame, Some(3));
         assert!((ticks[5].t_us - (5.0 * cfg.period_us()) as i64).abs() <= 1);
+    }
+
+    #[test]
+    fn a_gap_longer_than_the_bridge_limit_is_counted_not_filled() {
+        let cfg = TimelineConfig {
+            max_bridged_ticks: 10,
+            ..TimelineConfig::default()
+        };
+        let mut edges = ideal_edges(&cfg, 0, 60);
+        // Pulses 5..=15 missing (11 in a row: over the limit), then 30..=39 (10: bridged).
+        edges.retain(|e| {
+            let i = (e.t_us as f64 / cfg.period_us()).round() as i64;
+            !(5..=15).contains(&i) && !(30..=39).contains(&i)
+        });
+        let mut it = TickIter::new(cfg, edges.into_iter());
+        let ticks: Vec<Tick> = it.by_ref().collect();
+        let c = *it.timeline().counters();
+        assert_eq!((c.gaps, c.unbridged, c.missing), (1, 11, 10));
+        assert_eq!(ticks.len(), 60 - 11);
+        let indices: Vec<u64> = ticks.iter().map(|t| t.index).collect();
+        assert_eq!(&indices[..6], &[0, 1, 2, 3, 4, 16]);
+        // Numbering continues across the gap, so depth frames stay on their pulses.
+        let after = ticks.iter().find(|t| t.index == 16).unwrap();
+        assert_eq!(after.depth_frame, Some(4));
+        assert!(
+            ticks
+                .iter()
+                .filter(|t| t.synthesized)
+                .all(|t| (30..=39).contains(&t.index))
+        );
+        assert!(c.irregularities() >= 11);
     }
 
     #[test]

@@ -217,6 +217,25 @@ fn inconsistent_geometry_and_bad_json_are_named() {
         "meta.json",
         "invalid",
     );
+    // A schedule no timeline can follow.
+    for (key, value, words) in [
+        ("ticks_per_depth", "0", "ticks_per_depth is 0"),
+        ("tick_rate_hz", "-120", "tick_rate_hz -120"),
+        ("channel", "99", "channel 99"),
+        ("wide_width_us", "50", "pulse widths"),
+    ] {
+        expect_error(
+            |d| {
+                let path = d.join("meta.json");
+                let mut meta: serde_json::Value =
+                    serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+                meta["trigger"][key] = serde_json::from_str(value).unwrap();
+                std::fs::write(&path, meta.to_string()).unwrap();
+            },
+            "meta.json",
+            words,
+        );
+    }
     expect_error(
         |d| {
             let mut r = rig();

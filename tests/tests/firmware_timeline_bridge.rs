@@ -113,6 +113,7 @@ fn firmware_defaults_match_the_timeline_defaults() {
         narrow_width_us: (plan.ticks_to_ns(u64::from(plan.event_width_ticks())) / 1_000) as i64,
         wide_width_us: (plan.ticks_to_ns(u64::from(plan.event_coded_width_ticks())) / 1_000) as i64,
         jitter_tolerance_us: TimelineConfig::default().jitter_tolerance_us,
+        max_bridged_ticks: TimelineConfig::default().max_bridged_ticks,
     };
     assert_eq!(derived, TimelineConfig::default());
 }

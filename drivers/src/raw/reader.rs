@@ -33,6 +33,16 @@ pub enum RawFileError {
     },
 }
 
+impl RawFileError {
+    /// What is wrong, without the file's name (for a message that names the file already).
+    pub fn problem(&self) -> String {
+        match self {
+            Self::Io { error, .. } => error.to_string(),
+            Self::Header { error, .. } => error.to_string(),
+        }
+    }
+}
+
 /// Reads a `.raw` file chunk by chunk through the decoder its header names.
 pub struct RawReader<R: Read> {
     path: PathBuf,

@@ -76,6 +76,39 @@ impl Default for TriggerSchedule {
 }
 
 impl TriggerSchedule {
+    /// Why this schedule cannot drive a timeline, if it cannot: a tick rate that is not a positive number up to
+    /// 10 kHz, no ticks per depth exposure, an event channel over 15 (EVT 3.0 carries 0..=15), or pulse widths
+    /// that are not positive with the phase-coded one wider.
+    pub fn problem(&self) -> Option<String> {
+        if !(self.tick_rate_hz.is_finite()
+            && self.tick_rate_hz > 0.0
+            && self.tick_rate_hz <= 10_000.0)
+        {
+            return Some(format!(
+                "trigger.tick_rate_hz {} is not in (0, 10000]",
+                self.tick_rate_hz
+            ));
+        }
+        if self.ticks_per_depth == 0 {
+            return Some(
+                "trigger.ticks_per_depth is 0 (120 Hz ticks per 30 Hz depth frame: 4)".into(),
+            );
+        }
+        if self.channel > 15 {
+            return Some(format!(
+                "trigger.channel {} is over 15 (EVT 3.0 carries channels 0..15)",
+                self.channel
+            ));
+        }
+        if self.narrow_width_us <= 0 || self.wide_width_us <= self.narrow_width_us {
+            return Some(format!(
+                "trigger pulse widths {} / {} us: both must be positive, the phase-coded (wide) one the wider",
+                self.narrow_width_us, self.wide_width_us
+            ));
+        }
+        None
+    }
+
     /// The timeline configuration for this schedule (default jitter tolerance).
     pub fn timeline_config(&self) -> TimelineConfig {
         TimelineConfig {
@@ -135,6 +168,9 @@ impl Recording {
         rig.validate()
             .map_err(|p| RecordingError::new(dir.join("camera.json"), p))?;
         let meta: RecordingMeta = read_json(&dir.join("meta.json"))?;
+        if let Some(problem) = meta.trigger.problem() {
+            return Err(RecordingError::new(dir.join("meta.json"), problem));
+        }
 
         let info_path = dir.join("models").join("models_info.json");
         let models = parse_models_info(&read_text(&info_path)?)
@@ -154,7 +190,7 @@ impl Recording {
 
         let events_path = dir.join("events.raw");
         let reader = RawReader::open(&events_path)
-            .map_err(|e| RecordingError::new(&events_path, e.to_string()))?;
+            .map_err(|e| RecordingError::new(&events_path, e.problem()))?;
         let events_header = reader.header().clone();
         let (ew, eh) = (rig.event_camera.width, rig.event_camera.height);
         match events_header.geometry {
@@ -214,7 +250,7 @@ impl Recording {
     /// A fresh streaming reader over `events.raw`.
     pub fn events(&self) -> Result<RawReader<File>, RecordingError> {
         let p = self.dir.join("events.raw");
-        RawReader::open(&p).map_err(|e| RecordingError::new(&p, e.to_string()))
+        RawReader::open(&p).map_err(|e| RecordingError::new(&p, e.problem()))
     }
 
     /// Path of depth frame `index` (whether or not it exists).

@@ -338,6 +338,8 @@ impl Health {
             "timeline": {
                 "pulses": t.pulses,
                 "missing": t.missing,
+                "gaps": t.gaps,
+                "unbridged": t.unbridged,
                 "extra": t.extra,
                 "jittered": t.jittered,
                 "phase_errors": t.phase_errors,

@@ -119,9 +119,11 @@ impl std::fmt::Display for Summary {
         )?;
         writeln!(
             f,
-            "timeline:        {} pulses, {} missing, {} extra, {} jittered, {} phase errors; depth frames {} ({} missing)",
+            "timeline:        {} pulses, {} missing, {} gaps ({} ticks not bridged), {} extra, {} jittered, {} phase errors; depth frames {} ({} missing)",
             t.pulses,
             t.missing,
+            t.gaps,
+            t.unbridged,
             t.extra,
             t.jittered,
             t.phase_errors,
