@@ -75,6 +75,13 @@ fn tracker_method_from_spec(
             "first-pose error `{noise}`: expected DEG:CM or DEG:CM:SEED (e.g. 5:5 or 5:5:2)"
         )),
     };
+    // `InitNoise` names the text it parsed (`DEG,CM`); name the one given here.
+    let parsed = parsed.map_err(|e| match e.split_once("`: ") {
+        Some((head, why)) if head.starts_with("init noise `") => {
+            format!("first-pose error `{noise}`: {why}")
+        }
+        _ => e,
+    });
     Some(
         parsed
             .map(|noise| crate::track::TrackerMethod::new(method, base).with_init_noise(noise))
@@ -250,8 +257,9 @@ impl MethodResults {
 }
 
 /// Runs `method` over one sequence: every object with ground truth, initialised from the ground truth at the
-/// first tick only, then evaluated at every tick. The objects are handed to the method together
-/// ([`Method::track_together`]); each is charged an equal share of the run time.
+/// first tick only, then evaluated at every tick (an object whose ground truth covers no tick is an error). The
+/// objects are handed to the method together ([`Method::track_together`]); each is charged an equal share of the
+/// run time.
 pub fn run_sequence(
     method: &mut dyn Method,
     sequence: &SuiteSequence,
@@ -262,12 +270,14 @@ pub fn run_sequence(
     let mut objects = Vec::new();
     for object in ground_truth_objects(recording)? {
         let gt = PoseTrack::from_samples(samples, &object);
-        if let Some(first) = ticks
+        let first = ticks
             .iter()
             .find_map(|t| gt.interpolated_at(t.t_us).map(|p| (t.t_us, p)))
-        {
-            objects.push((object, gt, first));
-        }
+            .ok_or_else(|| EvalError::Uncovered {
+                object: object.clone(),
+                ticks: ticks.len(),
+            })?;
+        objects.push((object, gt, first));
     }
     let inputs: Vec<MethodInput<'_>> = objects
         .iter()

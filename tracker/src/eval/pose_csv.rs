@@ -32,7 +32,11 @@ pub struct PoseCsvError {
     pub reason: String,
 }
 
-/// Parses tracker output CSV text (header line required, blank lines ignored); rows keep file order.
+/// The states a pose CSV row may carry (`crate::track::TrackingState::as_str`).
+pub const POSE_STATES: [&str; 3] = ["tracking", "degraded", "lost"];
+
+/// Parses tracker output CSV text (header line required, blank lines ignored); rows keep file order. A row needs a
+/// finite position, a unit quaternion (within 1e-3), a quality in [0, 1] and one of [`POSE_STATES`].
 pub fn parse_pose_csv(text: &str) -> Result<Vec<PoseRecord>, PoseCsvError> {
     let mut lines = text.lines().enumerate();
     match lines.next() {
@@ -87,6 +91,16 @@ pub fn parse_pose_csv(text: &str) -> Result<Vec<PoseRecord>, PoseCsvError> {
         let norm = q.norm();
         if (norm - 1.0).abs() > 1e-3 {
             return Err(err(format!("quaternion norm {norm:.6} is not 1")));
+        }
+        if !(0.0..=1.0).contains(&v[7]) {
+            return Err(err(format!("quality `{}` is not in [0, 1]", f[9])));
+        }
+        if !POSE_STATES.contains(&f[10]) {
+            return Err(err(format!(
+                "state `{}` is not one of {}",
+                f[10],
+                POSE_STATES.join(", ")
+            )));
         }
         out.push(PoseRecord {
             t_us,
@@ -261,7 +275,8 @@ mod tests {
                     for r in &records {
                         prop_assert!(r.pose.translation.vector.iter().all(|v| v.is_finite()));
                         prop_assert!((r.pose.rotation.norm() - 1.0).abs() < 1e-9);
-                        prop_assert!(r.quality.is_finite() && !r.object.is_empty());
+                        prop_assert!((0.0..=1.0).contains(&r.quality) && !r.object.is_empty());
+                        prop_assert!(POSE_STATES.contains(&r.state.as_str()), "{}", r.state);
                     }
                 }
                 Err(e) => prop_assert!((2..=rows.len() + 1).contains(&e.line), "{}", e),
@@ -357,6 +372,17 @@ mod tests {
         assert!(e.reason.contains("norm"), "{e}");
         let e = parse_pose_csv(&format!("{POSE_CSV_HEADER}\n1,can,0,0,1\n")).unwrap_err();
         assert!(e.reason.contains("11 fields"), "{e}");
+        let e = parse_pose_csv(&format!(
+            "{POSE_CSV_HEADER}\n1,can,0,0,1,0,0,0,1,0.5,tracking\n2,can,0,0,1,0,0,0,1,7,lost\n"
+        ))
+        .unwrap_err();
+        assert_eq!(e.line, 3);
+        assert!(e.reason.contains("quality `7`"), "{e}");
+        let e = parse_pose_csv(&format!(
+            "{POSE_CSV_HEADER}\n1,can,0,0,1,0,0,0,1,0.5,fine\n"
+        ))
+        .unwrap_err();
+        assert!(e.reason.contains("state `fine`"), "{e}");
     }
 
     #[test]

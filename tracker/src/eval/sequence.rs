@@ -25,6 +25,18 @@ pub enum EvalError {
     /// The trigger timeline of `events.raw` yields no tick.
     #[error("{0}: events.raw has no trigger ticks on the scheduled channel")]
     NoTicks(String),
+    /// The ground truth of an object covers none of the recording's ticks (a damaged `events.raw` whose clock
+    /// jumped, or a `groundtruth.csv` of another recording).
+    #[error(
+        "object `{object}`: its ground truth covers none of the recording's {ticks} ticks (is events.raw or \
+         groundtruth.csv damaged? `eventtrack6d inspect` shows the event clock's span)"
+    )]
+    Uncovered {
+        /// Object name.
+        object: String,
+        /// Ticks of the recording's trigger timeline.
+        ticks: usize,
+    },
     /// An object's model is missing or unusable.
     #[error("object {object}: {reason}")]
     Model {
@@ -271,6 +283,12 @@ pub fn evaluate_object(
             &gt_pose,
             depth.as_deref(),
         )?);
+    }
+    if frames.is_empty() && !ticks.is_empty() {
+        return Err(EvalError::Uncovered {
+            object: object.into(),
+            ticks: ticks.len(),
+        });
     }
     Ok(ObjectSequence {
         object: object.into(),

@@ -6,13 +6,12 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
     /// A file (OBJ, MTL or texture) could not be read: missing, a directory, no permission.
-    #[error("cannot read {}: {source}", path.display())]
+    #[error("cannot read {}: {error}", path.display())]
     Read {
         /// The file that could not be read.
         path: PathBuf,
-        /// The underlying I/O error.
-        #[source]
-        source: std::io::Error,
+        /// The underlying I/O error (in the message, so not also a source).
+        error: std::io::Error,
     },
     /// An OBJ or MTL file is malformed.
     #[error("malformed {kind} file {}: {reason}", path.display())]
@@ -41,7 +40,11 @@ pub enum MeshError {
         path: PathBuf,
     },
     /// A vertex position is NaN or infinite.
-    #[error("mesh {} has a non-finite vertex #{vertex}: {value:?}", path.display())]
+    #[error(
+        "mesh {} has a non-finite vertex position {value:?} (#{vertex} in the loaded mesh's order, which may \
+         differ from the file's `v` lines)",
+        path.display()
+    )]
     NonFiniteVertex {
         /// The mesh input.
         path: PathBuf,

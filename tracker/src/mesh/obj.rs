@@ -37,9 +37,9 @@ pub struct LoadedMesh {
 }
 
 fn read_file(path: &Path) -> Result<Vec<u8>, MeshError> {
-    std::fs::read(path).map_err(|source| MeshError::Read {
+    std::fs::read(path).map_err(|error| MeshError::Read {
         path: path.to_path_buf(),
-        source,
+        error,
     })
 }
 
@@ -162,10 +162,10 @@ pub fn load_obj(path: &Path, options: &MeshLoadOptions) -> Result<LoadedMesh, Me
                         })
                     })
                 }
-                Err(source) => {
+                Err(error) => {
                     record(MeshError::Read {
                         path: mtl_path.clone(),
-                        source,
+                        error,
                     });
                     Err(tobj::LoadError::OpenFileFailed)
                 }

@@ -75,21 +75,31 @@ pub struct InitNoise {
 }
 
 impl InitNoise {
-    /// Parses `DEG,CM` (e.g. `5,5`).
+    /// Largest rotation error accepted, degrees (a turn by more is a turn by less the other way).
+    pub const MAX_DEGREES: f64 = 180.0;
+    /// Largest translation error accepted, centimetres (a first pose a metre off is not a tracking start).
+    pub const MAX_CENTIMETRES: f64 = 100.0;
+
+    /// Parses `DEG,CM` (e.g. `5,5`): DEG in [0, 180], CM in [0, 100].
     pub fn parse(text: &str, seed: u64) -> Result<Self, String> {
         let parts: Vec<&str> = text.split(',').map(str::trim).collect();
         let [deg, cm] = parts.as_slice() else {
             return Err(format!("init noise `{text}`: expected DEG,CM (e.g. 5,5)"));
         };
-        let num = |s: &str, what: &str| {
-            s.parse::<f64>()
+        let num = |s: &str, what: &str, max: f64| {
+            let v = s
+                .parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite() && *v >= 0.0)
-                .ok_or_else(|| format!("init noise `{text}`: {what} `{s}` is not a number >= 0"))
+                .ok_or_else(|| format!("init noise `{text}`: {what} `{s}` is not a number >= 0"))?;
+            if v > max {
+                return Err(format!("init noise `{text}`: {what} `{s}` is over {max}"));
+            }
+            Ok(v)
         };
         Ok(Self {
-            degrees: num(deg, "degrees")?,
-            centimetres: num(cm, "centimetres")?,
+            degrees: num(deg, "degrees", Self::MAX_DEGREES)?,
+            centimetres: num(cm, "centimetres", Self::MAX_CENTIMETRES)?,
             seed,
         })
     }
@@ -271,7 +281,9 @@ mod tests {
     fn init_noise_text_is_two_numbers_at_least_zero() {
         let n = InitNoise::parse(" 5, 2.5 ", 7).expect("two numbers");
         assert_eq!((n.degrees, n.centimetres, n.seed), (5.0, 2.5, 7));
-        for bad in ["5", "5,5,5", "-1,0", "x,1", "1,inf", "", "1,"] {
+        for bad in [
+            "5", "5,5,5", "-1,0", "x,1", "1,inf", "", "1,", "181,0", "0,100.5", "5,1e9",
+        ] {
             let e = InitNoise::parse(bad, 0).expect_err(bad);
             assert!(e.contains(&format!("`{bad}`")), "{e}");
         }
@@ -281,7 +293,7 @@ mod tests {
         #[test]
         fn any_text_parses_or_says_why(text in "[0-9eE.,+ inf-]{0,12}", seed in any::<u64>()) {
             match InitNoise::parse(&text, seed) {
-                Ok(n) => prop_assert!(n.degrees.is_finite() && n.degrees >= 0.0 && n.centimetres.is_finite() && n.centimetres >= 0.0),
+                Ok(n) => prop_assert!((0.0..=180.0).contains(&n.degrees) && (0.0..=100.0).contains(&n.centimetres)),
                 Err(e) => prop_assert!(e.starts_with("init noise `"), "{}", e),
             }
         }
