@@ -38,7 +38,7 @@ enum Command {
         /// Speed level: slow (~0.3 m/s), moderate (~1 m/s), fast (~2 m/s, up to 15 rad/s).
         #[arg(long, default_value = "moderate")]
         speed: SpeedLevel,
-        /// Length, seconds.
+        /// Length, seconds, in [0.01, 600].
         #[arg(long, default_value_t = 3.0)]
         seconds: f64,
         /// Seed of everything random.
@@ -47,10 +47,10 @@ enum Command {
         /// Output recording directory (created; files in it are overwritten).
         #[arg(long)]
         out: PathBuf,
-        /// Probability that a depth frame is dropped.
+        /// Probability that a depth frame is dropped, in [0, 1].
         #[arg(long, default_value_t = 0.0)]
         drop_depth: f64,
-        /// Background noise events per pixel per second.
+        /// Background noise events per pixel per second, in [0, 100].
         #[arg(long, default_value_t = 0.05)]
         noise_hz: f64,
         /// Leave out the hand-like occluders.
@@ -75,7 +75,7 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
-        /// Sequences generated at once (default: one per available core); each renders on one thread and
+        /// Sequences generated at once, 1 to 256 (default: one per available core); each renders on one thread and
         /// simulates the event sensor on another. The recordings do not depend on it; memory grows by about
         /// 160 MiB per job.
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
@@ -99,13 +99,13 @@ enum Command {
         /// Output `.raw` file (overwritten).
         #[arg(long)]
         out: PathBuf,
-        /// Length, seconds.
+        /// Length, seconds, in (0, 3600].
         #[arg(long, default_value_t = 2.0)]
         seconds: f64,
-        /// Rotation rate, revolutions per second.
+        /// Rotation rate, revolutions per second, in (0, 100].
         #[arg(long, default_value_t = 1.0)]
         revolutions_per_s: f64,
-        /// Noise events per pixel per second.
+        /// Noise events per pixel per second, in [0, 1000].
         #[arg(long, default_value_t = 0.1)]
         noise_hz: f64,
         /// Seed of the noise.
@@ -142,7 +142,9 @@ fn main() -> ExitCode {
         } => {
             let object = match ObjectKind::from_name(&object) {
                 Some(k) => ObjectSource::Library(k),
-                None if object.ends_with(".obj") => ObjectSource::File(PathBuf::from(object)),
+                None if object.to_ascii_lowercase().ends_with(".obj") => {
+                    ObjectSource::File(PathBuf::from(object))
+                }
                 None => {
                     let names: Vec<&str> = ObjectKind::ALL.iter().map(|k| k.name()).collect();
                     eprintln!(
@@ -287,6 +289,16 @@ fn pattern(out: PathBuf, seconds: f64, rev: f64, noise: f64, seed: u64) -> anyho
     anyhow::ensure!(
         noise.is_finite() && (0.0..=1000.0).contains(&noise),
         "--noise-hz must be in [0, 1000]"
+    );
+    let ext = out
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
+    anyhow::ensure!(
+        ext == "raw" || ext == "evt3",
+        "--out {}: the pattern is an EVT 3.0 stream; name the file `.raw` (or `.evt3`)",
+        out.display()
     );
     if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent)

@@ -35,7 +35,7 @@ pub enum PreviewError {
         reason: String,
     },
     /// A requested time is outside the recording.
-    #[error("time {t_s} s is outside the recording (0 .. {end_s} s)")]
+    #[error("time {t_s} s is outside the recording (0 .. {end_s:.3} s)")]
     TimeOutside {
         /// Requested time, seconds.
         t_s: f64,
@@ -104,7 +104,7 @@ pub fn write_previews(
             problem: e.to_string(),
         })?;
     for &t in times_s {
-        if t < 0.0 || t * 1e6 > sink.last_t as f64 + 1.0 {
+        if !t.is_finite() || t < 0.0 || t * 1e6 > sink.last_t as f64 + 1.0 {
             return Err(PreviewError::TimeOutside {
                 t_s: t,
                 end_s: sink.last_t as f64 * 1e-6,

@@ -44,7 +44,9 @@ impl Companion {
         let name = parts.next().unwrap_or_default().trim();
         let object = match ObjectKind::from_name(name) {
             Some(kind) => ObjectSource::Library(kind),
-            None if name.ends_with(".obj") => ObjectSource::File(PathBuf::from(name)),
+            None if name.to_ascii_lowercase().ends_with(".obj") => {
+                ObjectSource::File(PathBuf::from(name))
+            }
             None => {
                 return Err(format!(
                     "`{spec}`: unknown object `{name}` (a library name or a path to an .obj file)"
@@ -187,10 +189,16 @@ pub enum GenerateError {
     },
 }
 
+/// Shortest sequence, seconds: long enough for the first 120 Hz ticks and the first depth frame, so the
+/// recording can be opened and tracked.
+pub const MIN_SECONDS: f64 = 0.01;
+
 pub(super) fn check(config: &GenerateConfig) -> Result<(), GenerateError> {
     let bad = |s: &str| Err(GenerateError::Parameter(s.to_string()));
-    if !(config.seconds.is_finite() && config.seconds > 0.0 && config.seconds <= 600.0) {
-        return bad("seconds must be in (0, 600]");
+    if !(config.seconds.is_finite() && config.seconds >= MIN_SECONDS && config.seconds <= 600.0) {
+        return bad(
+            "seconds must be in [0.01, 600] (a recording needs its first ticks and depth frame)",
+        );
     }
     if !(config.max_step_px.is_finite() && config.max_step_px > 0.01 && config.max_step_px <= 5.0) {
         return bad("max step must be in (0.01, 5] pixels");
@@ -212,14 +220,20 @@ pub(super) fn check(config: &GenerateConfig) -> Result<(), GenerateError> {
     let e = &config.esim;
     if e.contrast
         .is_some_and(|c| !(c.is_finite() && c > 0.01 && c < 2.0))
-        || !(e.contrast_spread.is_finite() && e.contrast_spread >= 0.0)
-        || !(e.refractory_us.is_finite() && e.refractory_us >= 0.0)
-        || !(e.noise_rate_hz.is_finite() && (0.0..=100.0).contains(&e.noise_rate_hz))
-        || !(e.log_eps.is_finite() && e.log_eps > 0.0)
     {
-        return bad(
-            "event camera parameters out of range (contrast in (0.01, 2), spread >= 0, refractory >= 0, noise in [0, 100] Hz, log eps > 0)",
-        );
+        return bad("contrast threshold must be in (0.01, 2)");
+    }
+    if !(e.contrast_spread.is_finite() && e.contrast_spread >= 0.0) {
+        return bad("contrast threshold spread must be >= 0");
+    }
+    if !(e.refractory_us.is_finite() && e.refractory_us >= 0.0) {
+        return bad("refractory period must be >= 0 us");
+    }
+    if !(e.noise_rate_hz.is_finite() && (0.0..=100.0).contains(&e.noise_rate_hz)) {
+        return bad("noise event rate (--noise-hz) must be in [0, 100] Hz per pixel");
+    }
+    if !(e.log_eps.is_finite() && e.log_eps > 0.0) {
+        return bad("log intensity epsilon must be > 0");
     }
     Ok(())
 }

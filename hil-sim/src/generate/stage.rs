@@ -11,6 +11,10 @@ use std::path::Path;
 use std::sync::Arc;
 use tracker::geometry::{PinholeCamera, Roi};
 use tracker::mesh::{Mesh, MeshLoadOptions, Symmetry, load_obj};
+
+/// Largest user mesh the simulated scene takes, metres across: the object moves about 0.6 m in front of the
+/// camera, where a 1 m object already fills the view.
+pub const MAX_OBJECT_DIAMETER_M: f64 = 1.0;
 use tracker::render::{
     BackgroundMesh, CpuRenderer, Lighting, MeshId, RenderError, RenderTarget, Renderer, Scene,
     SceneObject,
@@ -266,8 +270,17 @@ fn object_mesh(
         }
         ObjectSource::File(path) => {
             let loaded = load_obj(path, &MeshLoadOptions::default())?;
+            let diameter = loaded.mesh.diameter();
+            if diameter > MAX_OBJECT_DIAMETER_M {
+                return Err(GenerateError::Parameter(format!(
+                    "mesh {} has a diameter of {diameter:.2} m; the simulated scene holds objects up to {} m \
+                     across in front of a camera 0.6 m away (metres are expected: is it in millimetres?)",
+                    path.display(),
+                    MAX_OBJECT_DIAMETER_M
+                )));
+            }
             for w in &loaded.warnings {
-                eprintln!("warning: {}: {w}", path.display());
+                eprintln!("warning: {w}");
             }
             let stem = path
                 .file_stem()

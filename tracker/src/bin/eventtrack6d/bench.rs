@@ -178,9 +178,18 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
         methods.push(method_from_spec_timed(spec, &base, transport).map_err(anyhow::Error::msg)?);
     }
+    // Each method is a column of the tables and a key of results.json: the same method twice (also by another
+    // spelling, e.g. `eventtrack6d@5:5` and `eventtrack6d@5:5:1`) would run twice and keep one result.
+    let names: Vec<String> = methods.iter().map(|m| m.name().to_string()).collect();
+    crate::paths::refuse_repeats(&names, "--methods")?;
     let given = Path::new(&args.suite);
     let (suite_name, dir) = if given.is_dir() {
         (args.suite.clone(), given.to_path_buf())
+    } else if given.exists() {
+        bail!(
+            "--suite {}: is a file, not a directory of recordings",
+            args.suite
+        );
     } else if args.suite.contains('/') || args.suite.contains('\\') {
         bail!("suite directory {} does not exist", args.suite);
     } else {

@@ -59,26 +59,45 @@ fn parse_geometry(s: &str) -> Result<Geometry, String> {
     Ok(Geometry::new(w, h))
 }
 
-fn output_format(args: &ConvertArgs) -> anyhow::Result<OutputFormat> {
-    if let Some(f) = args.to {
-        return Ok(f);
+/// The format an output file name's extension says, if it names one. `.raw` holds any EVT version (its header
+/// says which), so it is `None` here unless `--to` is missing, where it means EVT 3.0.
+fn format_of_extension(ext: &str) -> Option<OutputFormat> {
+    match ext {
+        "csv" => Some(OutputFormat::Csv),
+        "evt2" => Some(OutputFormat::Evt2),
+        "evt21" => Some(OutputFormat::Evt21),
+        "evt3" => Some(OutputFormat::Evt3),
+        _ => None,
     }
+}
+
+fn output_format(args: &ConvertArgs) -> anyhow::Result<OutputFormat> {
     let ext = args
         .output
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    Ok(match ext.as_str() {
-        "csv" => OutputFormat::Csv,
-        "evt2" => OutputFormat::Evt2,
-        "evt21" => OutputFormat::Evt21,
-        "raw" | "evt3" => OutputFormat::Evt3,
-        _ => bail!(
+    let named = format_of_extension(&ext);
+    match (args.to, named) {
+        (Some(to), Some(named)) if to != named => bail!(
+            "{}: --to {} contradicts the extension `.{ext}`; rename the output or drop --to",
+            args.output.display(),
+            to.to_possible_value()
+                .map_or("?".into(), |v| v.get_name().to_string()),
+        ),
+        (Some(OutputFormat::Csv), None) if ext == "raw" => bail!(
+            "{}: --to csv would write text into a `.raw` file; name the output `.csv`",
+            args.output.display()
+        ),
+        (Some(to), _) => Ok(to),
+        (None, Some(named)) => Ok(named),
+        (None, None) if ext == "raw" => Ok(OutputFormat::Evt3),
+        (None, None) => bail!(
             "{}: cannot tell the output format from the extension `.{ext}`; use --to evt3|evt2|evt21|csv",
             args.output.display()
         ),
-    })
+    }
 }
 
 /// Where converted records go.
@@ -136,6 +155,10 @@ impl Sink {
 }
 
 pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
+    crate::paths::check_outputs(
+        &[("input", args.input.as_path())],
+        &[("output", args.output.as_path())],
+    )?;
     let format = output_format(args)?;
     let is_csv_input = args
         .input
@@ -149,76 +172,104 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     let mut dropped_triggers = 0u64;
     let mut events = 0u64;
     let out_path = &args.output;
-    let result = if is_csv_input {
-        let geometry = args.geometry.unwrap_or(Geometry::new(1280, 720));
-        let mut sink = Sink::create(out_path, format, geometry, "csv")?;
-        let mut input =
-            File::open(&args.input).with_context(|| format!("{}", args.input.display()))?;
-        let mut parser = EventCsvParser::new();
-        let mut buf = vec![0u8; 1 << 20];
-        let mut bad: Option<String> = None;
-        let mut done = 0u64;
-        loop {
-            let n = input
-                .read(&mut buf)
-                .with_context(|| format!("{}: read failed", args.input.display()))?;
-            let mut on_error = |e: drivers::formats::csv::CsvLineError| {
-                bad.get_or_insert_with(|| e.to_string());
-            };
-            if n == 0 {
-                parser.finish(&mut |e| batch.cd.push(e), &mut on_error);
-            } else {
-                parser.feed(&buf[..n], &mut |e| batch.cd.push(e), &mut on_error);
+    let writing = || {
+        format!(
+            "converting {} to {}",
+            args.input.display(),
+            out_path.display()
+        )
+    };
+    let mut convert = || -> anyhow::Result<_> {
+        Ok(if is_csv_input {
+            let geometry = args.geometry.unwrap_or(Geometry::new(1280, 720));
+            let mut sink = Sink::create(out_path, format, geometry, "csv")?;
+            let mut input =
+                File::open(&args.input).with_context(|| format!("{}", args.input.display()))?;
+            let mut parser = EventCsvParser::new();
+            let mut buf = vec![0u8; 1 << 20];
+            let mut bad: Option<String> = None;
+            let mut done = 0u64;
+            loop {
+                let n = input
+                    .read(&mut buf)
+                    .with_context(|| format!("{}: read failed", args.input.display()))?;
+                let mut on_error = |e: drivers::formats::csv::CsvLineError| {
+                    bad.get_or_insert_with(|| e.to_string());
+                };
+                if n == 0 {
+                    parser.finish(&mut |e| batch.cd.push(e), &mut on_error);
+                } else {
+                    parser.feed(&buf[..n], &mut |e| batch.cd.push(e), &mut on_error);
+                }
+                if let Some(msg) = bad.take() {
+                    bail!("{}: {msg}", args.input.display());
+                }
+                if let Some(e) = batch
+                    .cd
+                    .iter()
+                    .find(|e| e.x >= geometry.width || e.y >= geometry.height)
+                {
+                    bail!(
+                        "{}: event at ({}, {}) lies outside the {}x{} sensor; pass --geometry",
+                        args.input.display(),
+                        e.x,
+                        e.y,
+                        geometry.width,
+                        geometry.height
+                    );
+                }
+                events += batch.cd.len() as u64;
+                sink.write(&batch).with_context(writing)?;
+                batch.clear();
+                done += n as u64;
+                bar.set_position(done);
+                if n == 0 {
+                    break;
+                }
             }
-            if let Some(msg) = bad.take() {
-                bail!("{}: {msg}", args.input.display());
-            }
-            if let Some(e) = batch
-                .cd
-                .iter()
-                .find(|e| e.x >= geometry.width || e.y >= geometry.height)
+            sink.finish().with_context(writing)?;
+            None
+        } else {
+            let mut reader = RawReader::open(&args.input)?;
+            if let (Some(header), Some(given)) = (reader.header().geometry, args.geometry)
+                && header != given
             {
-                bail!(
-                    "{}: event at ({}, {}) lies outside the {}x{} sensor; pass --geometry",
+                eprintln!(
+                    "warning: --geometry {}x{} ignored: the header of {} says {}x{}",
+                    given.width,
+                    given.height,
                     args.input.display(),
-                    e.x,
-                    e.y,
-                    geometry.width,
-                    geometry.height
+                    header.width,
+                    header.height
                 );
             }
-            events += batch.cd.len() as u64;
-            sink.write(&batch)
-                .with_context(|| format!("{}", out_path.display()))?;
-            batch.clear();
-            done += n as u64;
-            bar.set_position(done);
-            if n == 0 {
-                break;
+            let geometry = reader
+                .header()
+                .geometry
+                .or(args.geometry)
+                .unwrap_or(Geometry::new(1280, 720));
+            let source = reader.header().format.format_name();
+            let mut sink = Sink::create(out_path, format, geometry, source)?;
+            while reader.read_chunk(&mut batch)? {
+                events += batch.cd.len() as u64;
+                dropped_triggers += sink.write(&batch).with_context(writing)?;
+                batch.clear();
+                bar.set_position(reader.bytes_read());
             }
-        }
-        sink.finish().map(|()| None)
-    } else {
-        let mut reader = RawReader::open(&args.input)?;
-        let geometry = reader
-            .header()
-            .geometry
-            .or(args.geometry)
-            .unwrap_or(Geometry::new(1280, 720));
-        let source = reader.header().format.format_name();
-        let mut sink = Sink::create(out_path, format, geometry, source)?;
-        while reader.read_chunk(&mut batch)? {
-            events += batch.cd.len() as u64;
-            dropped_triggers += sink
-                .write(&batch)
-                .with_context(|| format!("{}", out_path.display()))?;
-            batch.clear();
-            bar.set_position(reader.bytes_read());
-        }
-        sink.finish().map(|()| Some(*reader.anomalies()))
+            sink.finish().with_context(writing)?;
+            Some(*reader.anomalies())
+        })
     };
+    let result = convert();
     bar.finish_and_clear();
-    let anomalies = result?;
+    let anomalies = match result {
+        Ok(a) => a,
+        Err(e) => {
+            // A partial file would read as a shorter recording: remove it (it is not the input: checked above).
+            let _ = std::fs::remove_file(out_path);
+            return Err(e);
+        }
+    };
     eprintln!("wrote {events} CD events to {}", out_path.display());
     if dropped_triggers > 0 {
         eprintln!("warning: {dropped_triggers} trigger edges dropped: CSV has no trigger records");

@@ -3,7 +3,7 @@
 //! live progress, and prints poses published, rate, latency, drops and accuracy.
 
 use crate::{demo_sequence, session};
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::Args;
 use drivers::recording::Recording;
 use std::path::{Path, PathBuf};
@@ -15,7 +15,8 @@ use tracker::runtime::config::{Config, Pace};
 /// poses go to a CSV file, over zenoh (ROS 2 PoseStamped, rmw_zenoh keys) and as CAN frames to a candump log.
 #[derive(Debug, Args)]
 pub struct DemoArgs {
-    /// Output directory for poses.csv, poses.candump.log and overlay.png (default: <cache>/run).
+    /// Output directory for poses.csv (and poses.revised.csv when late depth frames revised poses),
+    /// poses.candump.log and overlay.png (default: <cache>/run).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Where the generated sequence is cached (default: target/demo next to the executable, else
@@ -25,22 +26,22 @@ pub struct DemoArgs {
     /// Library object of the sequence (default from config/default.toml: mug).
     #[arg(long)]
     pub object: Option<String>,
-    /// Motion profile: translation, rotation, shake, throw, hand-switch, depth.
+    /// Motion profile: translation, rotation, shake, throw, hand-switch, depth (default: shake).
     #[arg(long)]
     pub motion: Option<String>,
-    /// Speed: slow, moderate, fast.
+    /// Speed: slow, moderate, fast (default: moderate).
     #[arg(long)]
     pub speed: Option<String>,
-    /// Length of the sequence, seconds (default 2).
+    /// Length of the sequence, seconds, 0.1 to 60 (default 2).
     #[arg(long)]
     pub seconds: Option<f64>,
-    /// Generator seed.
+    /// Generator seed (default 1); another seed is another sequence of the same kind.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Replay as fast as possible instead of in real time.
+    /// Replay as fast as possible instead of in real time (latency figures then measure a loaded tracker).
     #[arg(long)]
     pub fast: bool,
-    /// Do not publish over zenoh.
+    /// Do not publish over zenoh (no session is opened: for machines where another process holds the ports).
     #[arg(long)]
     pub no_zenoh: bool,
     /// Also write a per-tick latency log (CSV: tick time, depth tick, waited / tick / sinks / latency / prepare
@@ -116,6 +117,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(demo_sequence::default_cache_dir);
     let out = args.out.clone().unwrap_or_else(|| cache.join("run"));
+    if out.exists() && !out.is_dir() {
+        bail!("--out {}: is a file, not a directory", out.display());
+    }
     config.output.dir = out.clone();
     let recording = demo_sequence::resolve(&mut config, &cache)?;
     let expected = Recording::open(&recording)

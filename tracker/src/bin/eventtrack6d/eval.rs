@@ -62,6 +62,17 @@ fn summary_json(s: &Summary) -> serde_json::Value {
 
 /// Runs the command.
 pub fn run(args: &EvalArgs) -> Result<()> {
+    let recording_files = crate::paths::recording_inputs(&args.gt);
+    let mut inputs: Vec<crate::paths::NamedPath<'_>> = recording_files
+        .iter()
+        .map(|(name, path)| (*name, path.as_path()))
+        .collect();
+    inputs.push(("--pred", args.pred.as_path()));
+    inputs.extend(args.revised.as_deref().map(|p| ("--revised", p)));
+    let mut outputs = Vec::new();
+    outputs.extend(args.json.as_deref().map(|p| ("--json", p)));
+    outputs.extend(args.bop.as_deref().map(|p| ("--bop", p)));
+    crate::paths::check_outputs(&inputs, &outputs)?;
     let text = std::fs::read_to_string(&args.pred)
         .with_context(|| format!("cannot read predictions {}", args.pred.display()))?;
     let mut preds = parse_pose_csv(&text).with_context(|| format!("{}", args.pred.display()))?;
@@ -79,6 +90,12 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     }
     let rec = Recording::open(&args.gt)?;
     let objects = ground_truth_objects(&rec)?;
+    if objects.is_empty() {
+        bail!(
+            "{}: groundtruth.csv holds no poses, so there is nothing to score against",
+            args.gt.display()
+        );
+    }
     for o in preds.iter().map(|p| &p.object) {
         if !objects.contains(o) {
             bail!(
@@ -110,6 +127,13 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             eprintln!("warning: no prediction for object `{object}`: every tick scores as missed");
         }
         let seq = evaluate_object(&rec, &ticks, object, &track)?;
+        if seq.frames.len() < ticks.len() {
+            eprintln!(
+                "warning: `{object}` scored at {} of {} ticks: its ground truth covers only part of the recording",
+                seq.frames.len(),
+                ticks.len()
+            );
+        }
         let a = seq.summary(false, limit);
         let b = seq.summary(true, limit);
         println!(

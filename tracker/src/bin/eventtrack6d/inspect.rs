@@ -16,8 +16,9 @@ pub struct InspectArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,
-    /// Trigger channel carrying the 120 Hz tick pulses (for the timeline report).
-    #[arg(long, default_value_t = 0)]
+    /// Trigger channel carrying the 120 Hz tick pulses (for the timeline report), 0 to 31 (EVT 2.0 / 2.1 carry
+    /// 0..31, EVT 3.0 0..15).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=31))]
     pub trigger_channel: u8,
 }
 
@@ -36,7 +37,7 @@ pub fn run(args: &InspectArgs) -> anyhow::Result<()> {
     if args.json {
         println!("{}", serde_json::to_string_pretty(&to_json(&s))?);
     } else {
-        print_text(&args.file, &s);
+        print_text(&args.file, &s, args.trigger_channel);
     }
     Ok(())
 }
@@ -101,6 +102,8 @@ fn to_json(s: &StreamSummary) -> serde_json::Value {
             "period_us": t.period_us,
             "pulses": t.counters.pulses,
             "missing": t.counters.missing,
+            "gaps": t.counters.gaps,
+            "unbridged": t.counters.unbridged,
             "extra": t.counters.extra,
             "jittered": t.counters.jittered,
             "phase_errors": t.counters.phase_errors,
@@ -111,7 +114,7 @@ fn to_json(s: &StreamSummary) -> serde_json::Value {
     })
 }
 
-fn print_text(path: &std::path::Path, s: &StreamSummary) {
+fn print_text(path: &std::path::Path, s: &StreamSummary, channel: u8) {
     let d = duration_us(s);
     println!("file        {}", path.display());
     println!("format      {} (evt {})", s.format, s.format.evt_version());
@@ -148,6 +151,9 @@ fn print_text(path: &std::path::Path, s: &StreamSummary) {
     for (ch, (r, f)) in edges {
         println!("triggers    channel {ch}: {r} rising, {f} falling");
     }
+    if s.timeline.is_none() {
+        println!("timeline    none: no trigger edges on channel {channel} (--trigger-channel)");
+    }
     if let Some(t) = s.timeline {
         let c = t.counters;
         println!(
@@ -158,9 +164,11 @@ fn print_text(path: &std::path::Path, s: &StreamSummary) {
             1e6 / t.period_us
         );
         println!(
-            "            missing {} (bridged), extra {}, jittered {}, phase errors {}, missing phase code {}, \
-             unpaired rising {}, unpaired falling {}",
+            "            missing {} (bridged), gaps {} ({} ticks not bridged), extra {}, jittered {}, phase errors {}, \
+             missing phase code {}, unpaired rising {}, unpaired falling {}",
             c.missing,
+            c.gaps,
+            c.unbridged,
             c.extra,
             c.jittered,
             c.phase_errors,

@@ -6,6 +6,7 @@ mod demo;
 mod demo_sequence;
 mod eval;
 mod inspect;
+mod paths;
 mod progress;
 mod run;
 mod session;

@@ -58,7 +58,9 @@ pub fn expected_ticks(rec: &Recording) -> Option<u64> {
     Some(((last - first) as f64 * 1e-6 * rec.meta.trigger.tick_rate_hz).round() as u64)
 }
 
-/// ADD-S / ADD AUC and AR (percent, 120 Hz) of each object of `poses_csv` against `recording`'s ground truth.
+/// ADD-S / ADD AUC and AR (percent, 120 Hz) of each object of `poses_csv` against `recording`'s ground truth. An
+/// object the run published but the ground truth does not hold is named in a warning and not scored; objects of
+/// the ground truth the run did not track are left out.
 pub fn accuracy(
     recording: &Path,
     poses_csv: &Path,
@@ -75,8 +77,23 @@ pub fn accuracy(
         tracker::eval::apply_revisions(&mut preds, &read(path)?);
     }
     let ticks = recording_ticks(&rec)?;
+    let in_ground_truth = ground_truth_objects(&rec)?;
+    let mut published: Vec<String> = Vec::new();
+    for p in &preds {
+        if !published.contains(&p.object) {
+            published.push(p.object.clone());
+        }
+    }
     let mut out = Vec::new();
-    for object in ground_truth_objects(&rec)? {
+    for object in published {
+        if !in_ground_truth.contains(&object) {
+            eprintln!(
+                "warning: `{object}` has no ground truth in {} (objects there: {}): its accuracy is not scored",
+                recording.display(),
+                in_ground_truth.join(", ")
+            );
+            continue;
+        }
         let track = PoseTrack::from_records(&preds, &object);
         let seq = evaluate_object(&rec, &ticks, &object, &track)?;
         out.push((object, seq.summary(false, AucLimit::Diameter)));

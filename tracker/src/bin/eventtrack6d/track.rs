@@ -27,7 +27,8 @@ pub struct TrackArgs {
     /// Output pose CSV.
     #[arg(long, value_name = "CSV")]
     pub out: PathBuf,
-    /// Objects to track (comma-separated); default: every object in the ground truth or the first-pose file.
+    /// Objects to track (comma-separated); default: the objects of --first-poses when it is given, else every
+    /// object in the ground truth.
     #[arg(long, value_delimiter = ',')]
     pub objects: Vec<String>,
     /// First poses as a pose CSV (first row per object); default: the recording's ground truth at its first tick.
@@ -36,8 +37,8 @@ pub struct TrackArgs {
     /// Perturb each first pose by DEG degrees (random axis) and CM centimetres (random direction), e.g. `5,5`.
     #[arg(long, value_name = "DEG,CM")]
     pub init_noise: Option<String>,
-    /// Seed of the first-pose perturbation.
-    #[arg(long, default_value_t = 1)]
+    /// Seed of the first-pose perturbation (with --init-noise).
+    #[arg(long, default_value_t = 1, requires = "init_noise")]
     pub seed: u64,
     /// Tracker parameters: a TOML file with the `[tracker]` table's keys at top level (see README).
     #[arg(long, value_name = "TOML")]
@@ -49,7 +50,8 @@ pub struct TrackArgs {
     #[arg(long, value_name = "DIR")]
     pub overlay: Option<PathBuf>,
     /// Draw an overlay every N ticks (120 Hz ticks; 12 = 10 per second).
-    #[arg(long, default_value_t = 12, value_name = "N")]
+    #[arg(long, default_value_t = 12, value_name = "N", requires = "overlay",
+          value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
     pub overlay_every: u64,
     /// Also write the depth safety net's decisions as CSV: at every fresh depth frame and object, one row per
     /// depth-only candidate (where its refinement started, its pose, the fraction of model points the depth
@@ -101,12 +103,31 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         .map(|s| InitNoise::parse(s, args.seed))
         .transpose()
         .map_err(anyhow::Error::msg)?;
+    crate::paths::refuse_repeats(&args.objects, "--objects")?;
+    let recording_files = crate::paths::recording_inputs(&args.recording);
+    let mut inputs: Vec<crate::paths::NamedPath<'_>> = recording_files
+        .iter()
+        .map(|(name, path)| (*name, path.as_path()))
+        .collect();
+    inputs.extend(args.first_poses.as_deref().map(|p| ("--first-poses", p)));
+    inputs.extend(args.params.as_deref().map(|p| ("--params", p)));
+    let mut outputs = vec![("--out", args.out.as_path())];
+    outputs.extend(
+        args.fallback_trace
+            .as_deref()
+            .map(|p| ("--fallback-trace", p)),
+    );
+    crate::paths::check_outputs(&inputs, &outputs)?;
     let rec = Recording::open(&args.recording)?;
     let first_poses: Vec<PoseRecord> = match &args.first_poses {
         Some(path) => {
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("reading {}", path.display()))?;
-            parse_pose_csv(&text).with_context(|| format!("{}", path.display()))?
+            let rows = parse_pose_csv(&text).with_context(|| format!("{}", path.display()))?;
+            if rows.is_empty() {
+                bail!("--first-poses {}: holds no poses", path.display());
+            }
+            rows
         }
         None => Vec::new(),
     };
@@ -117,13 +138,36 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         n.dedup();
         n
     } else {
+        if rec.ground_truth.is_none() {
+            bail!(
+                "{}: the recording has no ground truth (groundtruth.csv) to take the first poses from: give them \
+                 with --first-poses",
+                args.recording.display()
+            );
+        }
         ground_truth_objects(&rec)?
     };
     let ticks = tracker::eval::recording_ticks(&rec)?;
     let mut objects = Vec::with_capacity(names.len());
+    let last_tick = ticks.last().map_or(i64::MIN, |t| t.t_us);
     for name in &names {
         let (t0, pose) = if let Some(r) = first_poses.iter().find(|r| &r.object == name) {
+            if r.t_us > last_tick {
+                bail!(
+                    "--first-poses: the first pose of `{name}` at {} us comes after the recording's last tick ({} us)",
+                    r.t_us,
+                    last_tick
+                );
+            }
             (r.t_us, r.pose)
+        } else if let Some(path) = &args.first_poses {
+            let mut there: Vec<&str> = first_poses.iter().map(|r| r.object.as_str()).collect();
+            there.dedup();
+            bail!(
+                "--first-poses {}: no first pose for `{name}` (objects there: {})",
+                path.display(),
+                there.join(", ")
+            );
         } else {
             let gt = rec.ground_truth.as_deref().with_context(|| {
                 format!("no first pose for `{name}`: the recording has no ground truth; pass --first-poses")
