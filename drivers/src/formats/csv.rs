@@ -109,7 +109,12 @@ fn parse_line(raw: &[u8]) -> Result<CdEvent, String> {
     }
     let t_us: i64 = t
         .parse()
-        .map_err(|_| format!("t_us `{t}` is not an integer"))?;
+        .map_err(|e: std::num::ParseIntError| match e.kind() {
+            std::num::IntErrorKind::PosOverflow | std::num::IntErrorKind::NegOverflow => {
+                format!("t_us `{t}` is out of range (microseconds as a 64-bit integer)")
+            }
+            _ => format!("t_us `{t}` is not an integer"),
+        })?;
     let x: u16 = x
         .parse()
         .map_err(|_| format!("x `{x}` is not an integer in 0..65535"))?;

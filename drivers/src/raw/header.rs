@@ -228,11 +228,11 @@ fn parse_geometry(key: &str, v: &str) -> Result<Geometry, HeaderError> {
     let w: u16 = w
         .trim()
         .parse()
-        .map_err(|_| bad("width is not an integer"))?;
+        .map_err(|_| bad("width is not an integer in 1..=2048"))?;
     let h: u16 = h
         .trim()
         .parse()
-        .map_err(|_| bad("height is not an integer"))?;
+        .map_err(|_| bad("height is not an integer in 1..=2048"))?;
     check_size(w, h).map_err(bad)
 }
 
