@@ -305,7 +305,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     }
     if counters.depth_frames_late > 0 {
         eprintln!(
-            "{} depth frames used after their own tick (delivered --depth-latency-ms late); {} times an object's pose history did not reach back to the exposure",
+            "{} depth frames used after their own tick (delivered late: --depth-latency-ms plus --depth-latency-jitter-ms); {} times an object's pose history did not reach back to the exposure",
             counters.depth_frames_late, counters.late_depth_unplaced
         );
         eprintln!(
