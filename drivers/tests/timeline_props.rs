@@ -59,4 +59,49 @@ proptest! {
             prop_assert!(w[1].t_us >= w[0].t_us);
         }
     }
+
+    /// Pulse trains with pauses of any length (a trigger that stops, an event clock that jumps in a damaged
+    /// stream): a pause of up to `max_bridged_ticks` missing pulses is filled, a longer one is counted and left
+    /// empty, so no pulse ever makes more than `max_bridged_ticks` ticks, and tick numbers only grow.
+    #[test]
+    fn long_pauses_are_counted_and_never_filled(
+        pauses in proptest::collection::vec(prop_oneof![
+            8 => Just(1u64),
+            1 => 2u64..30,
+            1 => 100u64..140,
+            1 => 1_000u64..100_000_000,
+        ], 1..60),
+    ) {
+        let cfg = TimelineConfig::default();
+        let period = cfg.period_us();
+        let mut k = 0u64;
+        let mut edges = Vec::new();
+        for p in std::iter::once(0).chain(pauses.iter().copied()) {
+            k += p;
+            let t = 10_000 + (k as f64 * period).round() as i64;
+            edges.push(TriggerEdge { t_us: t, channel: 0, rising: true });
+            edges.push(TriggerEdge { t_us: t + 100, channel: 0, rising: false });
+        }
+        let mut it = TickIter::new(cfg, edges.into_iter());
+        let ticks: Vec<_> = it.by_ref().collect();
+        let c = *it.timeline().counters();
+        let long: Vec<u64> = pauses.iter().map(|p| p - 1).filter(|&m| m > cfg.max_bridged_ticks).collect();
+        let short: u64 = pauses.iter().map(|p| p - 1).filter(|&m| m <= cfg.max_bridged_ticks).sum();
+        prop_assert_eq!(c.pulses as usize, pauses.len() + 1);
+        prop_assert_eq!(c.gaps as usize, long.len());
+        // The length of a long pause is measured with the period estimate (tracked within 1 % of the MCU's
+        // clock as the camera sees it), so it may be off by a fraction of the pause.
+        let unbridged: u64 = long.iter().sum();
+        let slack: u64 = long.iter().map(|m| m / 1000 + 1).sum();
+        prop_assert!(c.unbridged.abs_diff(unbridged) <= slack, "{} unbridged, {} missed", c.unbridged, unbridged);
+        prop_assert_eq!(c.missing, short);
+        prop_assert_eq!(ticks.len() as u64, c.pulses + c.missing);
+        let last = ticks.last().map_or(0, |t| t.index);
+        prop_assert!(last.abs_diff(k) <= slack, "last index {} for {} periods", last, k);
+        for w in ticks.windows(2) {
+            prop_assert!(w[1].index > w[0].index);
+            prop_assert!(w[1].t_us > w[0].t_us);
+            prop_assert!(w[1].index - w[0].index == 1 || !w[1].synthesized);
+        }
+    }
 }
