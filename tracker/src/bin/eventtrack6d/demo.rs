@@ -20,7 +20,7 @@ pub struct DemoArgs {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Where the generated sequence is cached (default: target/demo next to the executable, else
-    /// $XDG_CACHE_HOME/eventtrack6d).
+    /// $XDG_CACHE_HOME/eventtrack6d, else ~/.cache/eventtrack6d).
     #[arg(long, value_name = "DIR")]
     pub cache_dir: Option<PathBuf>,
     /// Library object of the sequence (default from config/default.toml: mug).

@@ -17,7 +17,7 @@ pub struct RunArgs {
     #[arg(long, value_name = "FILE")]
     pub config: PathBuf,
     /// Where a `demo` source's generated sequence is cached (default: target/demo next to the executable, else
-    /// $XDG_CACHE_HOME/eventtrack6d).
+    /// $XDG_CACHE_HOME/eventtrack6d, else ~/.cache/eventtrack6d).
     #[arg(long, value_name = "DIR")]
     pub cache_dir: Option<PathBuf>,
     /// Do not score the poses against the recording's ground truth at the end.
