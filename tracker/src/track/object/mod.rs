@@ -24,6 +24,11 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3, Vector6
 use quality_window::QualityWindow;
 pub(crate) use snapshot::ObjectSnapshot;
 
+/// Longest time, seconds, the motion model extrapolates an estimate (12 ticks at 120 Hz). Ticks are 8.3 ms apart,
+/// also across the short trigger gaps the timeline bridges; after a longer pause (a trigger outage) the object
+/// starts where its velocity would have taken it in this time, and the refinement and re-detection go on from there.
+pub const MAX_PREDICTION_S: f64 = 0.1;
+
 /// A tracked object: its model, its state and the buffers its refinement reuses every tick.
 #[derive(Debug)]
 pub(crate) struct ObjectTrack {
@@ -219,14 +224,18 @@ impl ObjectTrack {
         pose * Point3::from(self.center_obj)
     }
 
-    /// Predicts the pose `dt_s` after the latest estimate (constant velocity about the centre).
+    /// Predicts the pose `dt_s` after the latest estimate (constant velocity about the centre, for at most
+    /// [`MAX_PREDICTION_S`]).
     pub fn predict(&mut self, dt_s: f64, config: &TrackerConfig) {
         self.predicted = self.prediction(dt_s, config);
     }
 
-    /// The pose `dt_s` after the latest estimate that [`Self::predict`] would predict.
+    /// The pose `dt_s` after the latest estimate that [`Self::predict`] would predict. The motion model
+    /// extrapolates at most [`MAX_PREDICTION_S`]: after a longer pause in the ticks the velocity says nothing
+    /// about where the object went.
     pub fn prediction(&self, dt_s: f64, config: &TrackerConfig) -> Isometry3<f64> {
         if config.prediction && self.state != TrackingState::Lost {
+            let dt_s = dt_s.min(MAX_PREDICTION_S);
             let mut xi = self.velocity * (dt_s * config.prediction_gain);
             if !config.predict_rotation {
                 xi.fixed_rows_mut::<3>(3).fill(0.0);
@@ -393,6 +402,21 @@ mod tests {
         o.state = TrackingState::Tracking;
         o.quality = 0.1;
         assert!(!o.needs_search(&q));
+    }
+
+    #[test]
+    fn the_prediction_reaches_no_further_than_its_horizon() {
+        let config = TrackerConfig::default();
+        let half = Vector3::new(0.05, 0.05, 0.05);
+        let start = Isometry3::translation(0.0, 0.0, 0.6);
+        let mut track = ObjectTrack::new(1, 0.1, -half, half, start, 0, &[], &config);
+        track.velocity = Vector6::new(2.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let x = |dt: f64| track.prediction(dt, &config).translation.x;
+        // One tick: 2 m/s x 8.3 ms x the prediction gain.
+        assert!((x(1.0 / 120.0) - 2.0 / 120.0 * config.prediction_gain).abs() < 1e-12);
+        // Past the horizon (ticks resuming after a trigger outage) the object is not flung away.
+        assert_eq!(x(5.0), x(MAX_PREDICTION_S));
+        assert!(x(5.0) < 0.11, "{}", x(5.0));
     }
 
     #[test]
