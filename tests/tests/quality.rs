@@ -41,11 +41,15 @@ fn without_events_quality_changes_only_at_depth_frames() {
         .expect("tracker");
 
     let mut qualities = Vec::new();
+    let mut depth_ticks = Vec::new();
     let stats = track_recording(
         &recording,
         &mut tracker,
         first,
-        |_, estimates, _| qualities.push(estimates[0].quality),
+        |tick, estimates, _| {
+            qualities.push(estimates[0].quality);
+            depth_ticks.push(tick.depth_frame.is_some());
+        },
         |_| {},
     )
     .expect("replay");
@@ -65,4 +69,17 @@ fn without_events_quality_changes_only_at_depth_frames() {
         "quality changed {changes} times over {} ticks with {depth_frames} depth frames: {qualities:?}",
         qualities.len()
     );
+    // And each change is at a depth frame's tick, not one after it.
+    for (i, w) in qualities.windows(2).enumerate() {
+        if w[0] != w[1] {
+            assert!(
+                depth_ticks[i + 1],
+                "quality changed at tick {} ({} -> {}), which has no depth frame",
+                i + 1,
+                w[0],
+                w[1]
+            );
+        }
+    }
+    assert!(changes > 0, "quality never changed: {qualities:?}");
 }

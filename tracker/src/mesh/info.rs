@@ -251,6 +251,75 @@ mod tests {
         assert_eq!(back.symmetries.len(), 2);
     }
 
+    fn symmetry() -> impl proptest::strategy::Strategy<Value = Symmetry> {
+        use proptest::prelude::*;
+        let vec3 = |r: f64| prop::array::uniform3(-r..r);
+        prop_oneof![
+            (vec3(0.2), vec3(3.0)).prop_map(|(t, r)| Symmetry::Discrete(Isometry3::new(
+                Vector3::from(t),
+                Vector3::from(r)
+            ))),
+            (vec3(1.0), vec3(0.2))
+                .prop_filter("an axis needs a direction", |(a, _)| Vector3::from(*a)
+                    .norm()
+                    > 1e-3)
+                .prop_map(|(a, o)| Symmetry::Continuous {
+                    axis: Unit::new_normalize(Vector3::from(a)),
+                    offset: Point3::from(Vector3::from(o)),
+                }),
+        ]
+    }
+
+    proptest::proptest! {
+        /// Every field survives the trip through the BOP shape (millimetres) and back (metres).
+        #[test]
+        fn any_info_reads_back_from_its_bop_json(
+            diameter in 0.001f64..5.0,
+            min in proptest::array::uniform3(-1.0f64..1.0),
+            size in proptest::array::uniform3(0.0f64..2.0),
+            symmetries in proptest::collection::vec(symmetry(), 0..4),
+        ) {
+            let min = Point3::from(Vector3::from(min));
+            let info = ObjectInfo {
+                diameter,
+                aabb: Aabb { min, max: min + Vector3::from(size) },
+                symmetries,
+            };
+            let back = ObjectInfo::from_bop_json("obj", &info.to_bop_json())
+                .map_err(|e| proptest::test_runner::TestCaseError::fail(e.to_string()))?;
+            proptest::prop_assert!((back.diameter - info.diameter).abs() < 1e-12);
+            proptest::prop_assert!((back.aabb.min - info.aabb.min).norm() < 1e-12);
+            proptest::prop_assert!((back.aabb.max - info.aabb.max).norm() < 1e-12);
+            // Written discrete ones first, then continuous ones (BOP's two lists).
+            let mut expected: Vec<&Symmetry> = info.symmetries.iter().filter(|s| matches!(s, Symmetry::Discrete(_))).collect();
+            expected.extend(info.symmetries.iter().filter(|s| matches!(s, Symmetry::Continuous { .. })));
+            proptest::prop_assert_eq!(back.symmetries.len(), expected.len());
+            for (b, e) in back.symmetries.iter().zip(expected) {
+                match (b, e) {
+                    (Symmetry::Discrete(b), Symmetry::Discrete(e)) => {
+                        proptest::prop_assert!((b.to_homogeneous() - e.to_homogeneous()).norm() < 1e-9);
+                    }
+                    (Symmetry::Continuous { axis: ba, offset: bo }, Symmetry::Continuous { axis: ea, offset: eo }) => {
+                        proptest::prop_assert!((ba.into_inner() - ea.into_inner()).norm() < 1e-9);
+                        proptest::prop_assert!((bo - eo).norm() < 1e-12, "offset {} against {}", bo, eo);
+                    }
+                    _ => proptest::prop_assert!(false, "{:?} read back as {:?}", e, b),
+                }
+            }
+        }
+
+        /// Any JSON value reads as an entry or gives an error naming the object; it never panics.
+        #[test]
+        fn any_json_reads_or_names_the_object(text in "[\\[\\]{}:,\"a-z_0-9. -]{0,60}") {
+            if let Ok(value) = serde_json::from_str::<Value>(&text)
+                && let Err(e) = ObjectInfo::from_bop_json("obj_000042", &value)
+            {
+                proptest::prop_assert!(e.to_string().contains("obj_000042"));
+                proptest::prop_assert!(!e.reason.is_empty());
+            }
+        }
+    }
+
     #[test]
     fn bop_json_errors_name_the_object() {
         let e = ObjectInfo::from_bop_json("obj_000007", &json!({"diameter": 10.0})).unwrap_err();
