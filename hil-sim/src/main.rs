@@ -295,8 +295,9 @@ fn pattern(out: PathBuf, seconds: f64, rev: f64, noise: f64, seed: u64) -> anyho
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
+    let special = std::fs::metadata(&out).is_ok_and(|m| !m.is_file() && !m.is_dir());
     anyhow::ensure!(
-        ext == "raw" || ext == "evt3",
+        special || ext == "raw" || ext == "evt3",
         "--out {}: the pattern is an EVT 3.0 stream; name the file `.raw` (or `.evt3`)",
         out.display()
     );

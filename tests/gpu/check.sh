@@ -63,13 +63,25 @@ run() {
     mkdir -p "$out"
     local log="$out/gpu-check.log"
     exec > >(tee "$log") 2>&1
+    export PATH="$PATH:/usr/sbin:/sbin"
     echo "== gpu-check $(date -u +%FT%TZ) on $(uname -n), $(nproc) cores"
-    if ! ldconfig -p | grep -q 'libvulkan\.so\.1'; then
-        for f in "$DIR"/debs/*.deb; do [ -e "$f" ] && dpkg -x "$f" /; done
+    # grep without -q reads the whole list, so `ldconfig -p` never dies of a closed pipe.
+    if ! ldconfig -p 2>/dev/null | grep 'libvulkan\.so\.1' >/dev/null; then
+        if [ "$(id -u)" != 0 ]; then
+            echo "run: no libvulkan.so.1 (the Vulkan loader) on this machine, and only root may unpack the one in" \
+                "$DIR/debs: install libvulkan1, or run as root" >&2
+            exit 2
+        fi
+        for f in "$DIR"/debs/*.deb; do
+            if [ -e "$f" ]; then dpkg -x "$f" /; fi
+        done
         ldconfig
     fi
-    if [ -z "${VK_DRIVER_FILES:-}" ] && ! ls /usr/share/vulkan/icd.d/nvidia_icd.json /etc/vulkan/icd.d/nvidia_icd.json >/dev/null 2>&1 \
-        && [ -e /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
+    local icd="" f
+    for f in /usr/share/vulkan/icd.d/nvidia_icd.json /etc/vulkan/icd.d/nvidia_icd.json; do
+        if [ -e "$f" ]; then icd=$f; fi
+    done
+    if [ -z "${VK_DRIVER_FILES:-}" ] && [ -z "$icd" ] && [ -e /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]; then
         export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
     fi
     echo "VK_DRIVER_FILES=${VK_DRIVER_FILES:-unset, the default search of the loader}"
@@ -85,10 +97,19 @@ run() {
 
     echo "== one tracker tick (tests/benches/tick.rs), all cores"
     local ticks='^(render_in_)?(depth_)?tick_(cpu|gpu)_160$|^cpu_of_tick_gpu_160$|^paced/(depth_)?tick_(cpu_ahead|gpu)_160_at_120hz$'
-    "$DIR/tick" --bench --warm-up-time 1 --measurement-time 3 "$ticks" || status=1
+    "$DIR/tick" --bench --warm-up-time 1 --measurement-time 3 "$ticks" 2>&1 | tee "$out/tick-all.txt" || status=1
 
-    echo "== one tracker tick, the process pinned to one core (taskset -c 0)"
-    taskset -c 0 "$DIR/tick" --bench --warm-up-time 1 --measurement-time 3 '^(depth_)?tick_(cpu|gpu)_160$' || status=1
+    # The first CPU this process may run on (a container's cpuset need not hold CPU 0).
+    local cpu
+    cpu=$(awk '/^Cpus_allowed_list/ { split($2, a, /[,-]/); print a[1] }' /proc/self/status 2>/dev/null)
+    if command -v taskset >/dev/null && [ -n "$cpu" ]; then
+        echo "== one tracker tick, the process pinned to one core (taskset -c $cpu)"
+        taskset -c "$cpu" "$DIR/tick" --bench --warm-up-time 1 --measurement-time 3 '^(depth_)?tick_(cpu|gpu)_160$' \
+            2>&1 | tee "$out/tick-one.txt" || status=1
+    else
+        echo "== (no taskset: the ticks pinned to one core are not measured)"
+        : > "$out/tick-one.txt"
+    fi
 
     if grep -q 'gpu tick bench skipped' "$log"; then
         echo "FAILED: wgpu found no Vulkan adapter, so no wgpu tick was measured" >&2
@@ -97,11 +118,21 @@ run() {
         echo "FAILED: wgpu drew on a CPU driver (lavapipe), not a GPU" >&2
         status=1
     fi
-    echo "== the one-tick goal (median at most 1 ms); the first of each pair on all cores, the second pinned to one"
-    awk '$1 ~ /^(depth_)?tick_gpu_160$/ && $2 == "time:" {
-        v = $5; u = $6; if (u == "µs" || u == "us") v /= 1000; else if (u == "ns") v /= 1e6; else if (u == "s") v *= 1000
-        printf "%-20s median %.3f ms: %s\n", $1, v, (v <= 1.0 ? "met" : "NOT met")
-    }' "$log" | tee "$out/goal.txt"
+    echo "== the one-tick goal with the wgpu renderer: median at most 1 ms"
+    : > "$out/goal.txt"
+    local where file
+    for where in all one; do
+        file="$out/tick-$where.txt"
+        awk -v where="$where" '$1 ~ /^(depth_)?tick_gpu_160$/ && $2 == "time:" {
+            v = $5; u = $6; if (u == "µs" || u == "us") v /= 1000; else if (u == "ns") v /= 1e6; else if (u == "s") v *= 1000
+            printf "%-20s %-9s median %.3f ms: %s\n", $1, (where == "all" ? "all cores" : "one core"), v, (v <= 1.0 ? "met" : "NOT met")
+        }' "$file" >> "$out/goal.txt"
+    done
+    cat "$out/goal.txt"
+    if ! grep -q 'tick_gpu_160 ' "$out/goal.txt"; then
+        echo "FAILED: no wgpu tick median was read from the benchmark output" >&2
+        status=1
+    fi
     echo "== summary (criterion's median is the middle figure of 'time:')"
     grep -E '^gpu renderer:|^GPU adapter:|^test result:|^[a-z_/0-9]+ *time:|^ +time:|^(paced/)?[a-z_0-9]+$' "$log" \
         | sed -e 's/^ *//' > "$out/summary.txt" || true

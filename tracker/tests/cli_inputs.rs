@@ -187,7 +187,63 @@ fn outputs_never_overwrite_inputs_or_each_other() {
         ],
         "--json",
     );
+    fails_with(
+        &[
+            "eval",
+            "--pred",
+            pred.to_str().unwrap(),
+            "--gt",
+            rec_s,
+            "--json",
+            pred.to_str().unwrap(),
+        ],
+        "would overwrite the --pred it reads",
+    );
+    // Nor onto a model of the recording.
+    let info = rec.join("models").join("models_info.json");
+    fails_with(
+        &[
+            "eval",
+            "--pred",
+            pred.to_str().unwrap(),
+            "--gt",
+            rec_s,
+            "--json",
+            info.to_str().unwrap(),
+        ],
+        "would overwrite the recording's models",
+    );
     assert!(std::fs::read_to_string(&pred).unwrap().starts_with(HEADER));
+}
+
+#[test]
+fn a_failed_conversion_leaves_no_partial_output_and_touches_nothing_it_did_not_write() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // An input refused before anything is written: an existing file at the output stays as it was.
+    let bad = d.join("bad.raw");
+    std::fs::write(&bad, "not a raw file\n").unwrap();
+    let keep = d.join("keep.csv");
+    std::fs::write(&keep, "precious\n").unwrap();
+    fails_with(
+        &["convert", bad.to_str().unwrap(), keep.to_str().unwrap()],
+        "bad.raw",
+    );
+    assert_eq!(std::fs::read_to_string(&keep).unwrap(), "precious\n");
+    // An input that fails half-way: the partial output is removed.
+    let csv = d.join("events.csv");
+    let mut text = String::from("t_us,x,y,p\n");
+    for i in 0..50_000 {
+        text.push_str(&format!("{},{},{},1\n", i * 10, i % 640, i % 480));
+    }
+    text.push_str("oops,1,1,1\n");
+    std::fs::write(&csv, text).unwrap();
+    let out = d.join("out.raw");
+    fails_with(
+        &["convert", csv.to_str().unwrap(), out.to_str().unwrap()],
+        "oops",
+    );
+    assert!(!out.exists(), "the partial output was left behind");
 }
 
 #[test]

@@ -320,3 +320,21 @@ fn plot_sequence(out: &Path, seq: &SuiteSequence, results: &[MethodResults]) -> 
         .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any `--depth-latency-ms` text gives a latency of 0..=1000 ms or an error quoting it; written ones read back.
+        #[test]
+        fn any_latency_text_parses_or_quotes_it(text in "[0-9.eE+ -]{0,10}", ms in 0.0f64..=1000.0) {
+            match parse_latency_ms(&text) {
+                Ok(v) => prop_assert!((0.0..=1000.0).contains(&v)),
+                Err(e) => prop_assert!(e.contains(&format!("`{text}`")), "{}", e),
+            }
+            prop_assert_eq!(parse_latency_ms(&ms.to_string()), Ok(ms));
+        }
+    }
+}

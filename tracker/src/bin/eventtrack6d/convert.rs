@@ -172,6 +172,8 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     let mut dropped_triggers = 0u64;
     let mut events = 0u64;
     let out_path = &args.output;
+    // Set once the output is created (truncated): only then is a failed conversion's output ours to remove.
+    let mut wrote_output = false;
     let writing = || {
         format!(
             "converting {} to {}",
@@ -183,6 +185,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         Ok(if is_csv_input {
             let geometry = args.geometry.unwrap_or(Geometry::new(1280, 720));
             let mut sink = Sink::create(out_path, format, geometry, "csv")?;
+            wrote_output = true;
             let mut input =
                 File::open(&args.input).with_context(|| format!("{}", args.input.display()))?;
             let mut parser = EventCsvParser::new();
@@ -250,6 +253,7 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
                 .unwrap_or(Geometry::new(1280, 720));
             let source = reader.header().format.format_name();
             let mut sink = Sink::create(out_path, format, geometry, source)?;
+            wrote_output = true;
             while reader.read_chunk(&mut batch)? {
                 events += batch.cd.len() as u64;
                 dropped_triggers += sink.write(&batch).with_context(writing)?;
@@ -265,8 +269,12 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
     let anomalies = match result {
         Ok(a) => a,
         Err(e) => {
-            // A partial file would read as a shorter recording: remove it (it is not the input: checked above).
-            let _ = std::fs::remove_file(out_path);
+            // A partial file would read as a shorter recording: remove what this run wrote (it is not the input:
+            // checked above), if it is a plain file; a link, a pipe or a device stays.
+            let plain = std::fs::symlink_metadata(out_path).is_ok_and(|m| m.file_type().is_file());
+            if wrote_output && plain {
+                let _ = std::fs::remove_file(out_path);
+            }
             return Err(e);
         }
     };
@@ -285,4 +293,51 @@ pub fn run(args: &ConvertArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any `--geometry` text gives a size of 1..=2048 per side or an error; a written size reads back.
+        #[test]
+        fn any_geometry_text_parses_or_says_why(text in "[0-9x -]{0,12}", w in 1u16..=2048, h in 1u16..=2048) {
+            match parse_geometry(&text) {
+                Ok(g) => prop_assert!((1..=2048).contains(&g.width) && (1..=2048).contains(&g.height)),
+                Err(e) => prop_assert!(!e.is_empty()),
+            }
+            prop_assert_eq!(parse_geometry(&format!("{w}x{h}")), Ok(Geometry::new(w, h)));
+        }
+    }
+
+    #[test]
+    fn extensions_and_to_must_agree() {
+        let args = |out: &str, to: Option<OutputFormat>| ConvertArgs {
+            input: "in.raw".into(),
+            output: out.into(),
+            to,
+            geometry: None,
+        };
+        assert_eq!(
+            output_format(&args("x.RAW", None)).unwrap(),
+            OutputFormat::Evt3
+        );
+        assert_eq!(
+            output_format(&args("x.evt21", None)).unwrap(),
+            OutputFormat::Evt21
+        );
+        assert_eq!(
+            output_format(&args("x.raw", Some(OutputFormat::Evt2))).unwrap(),
+            OutputFormat::Evt2
+        );
+        assert!(output_format(&args("x.raw", Some(OutputFormat::Csv))).is_err());
+        assert!(output_format(&args("x.evt2", Some(OutputFormat::Evt3))).is_err());
+        assert!(output_format(&args("x.bin", None)).is_err());
+        assert_eq!(
+            output_format(&args("x.bin", Some(OutputFormat::Csv))).unwrap(),
+            OutputFormat::Csv
+        );
+    }
 }

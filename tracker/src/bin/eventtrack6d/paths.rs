@@ -24,10 +24,20 @@ fn absolute(p: &Path) -> PathBuf {
     std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
 }
 
+/// Whether `p` exists and is not a plain file or directory (after links): a device such as `/dev/null`, a pipe
+/// or a socket, which writing does not overwrite.
+fn is_special(p: &Path) -> bool {
+    std::fs::metadata(p).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
 /// Refuses a set of outputs that would overwrite one of `inputs` or each other, or whose parent folder does not
-/// exist; a directory where a file is to be written is refused too.
+/// exist; a directory where a file is to be written is refused too. Devices and pipes (`/dev/null`) are taken
+/// as they are.
 pub fn check_outputs(inputs: &[NamedPath<'_>], outputs: &[NamedPath<'_>]) -> Result<()> {
     for (i, (name, out)) in outputs.iter().enumerate() {
+        if is_special(out) {
+            continue;
+        }
         if out.is_dir() {
             bail!("{name} {}: is a directory, not a file", out.display());
         }
@@ -63,9 +73,10 @@ pub fn check_outputs(inputs: &[NamedPath<'_>], outputs: &[NamedPath<'_>]) -> Res
     Ok(())
 }
 
-/// The files of a recording directory that a command reads (those that exist), for [`check_outputs`].
+/// The files of a recording directory that a command reads (those that exist), for [`check_outputs`]: its
+/// event stream, ground truth, cameras and metadata, and every file in `models/` and `depth/`.
 pub fn recording_inputs(dir: &Path) -> Vec<(&'static str, PathBuf)> {
-    [
+    let mut files: Vec<(&'static str, PathBuf)> = [
         ("recording's events", "events.raw"),
         ("recording's ground truth", "groundtruth.csv"),
         ("recording's cameras", "camera.json"),
@@ -74,7 +85,27 @@ pub fn recording_inputs(dir: &Path) -> Vec<(&'static str, PathBuf)> {
     .into_iter()
     .map(|(name, file)| (name, dir.join(file)))
     .filter(|(_, p)| p.exists())
-    .collect()
+    .collect();
+    for (name, sub) in [
+        ("recording's models", "models"),
+        ("recording's depth frames", "depth"),
+    ] {
+        if let Ok(entries) = std::fs::read_dir(dir.join(sub)) {
+            files.extend(entries.flatten().map(|e| (name, e.path())));
+        }
+    }
+    files
+}
+
+/// `items` without repeats, in the order each first appears.
+pub fn first_of_each(items: impl IntoIterator<Item = String>) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for item in items {
+        if !out.contains(&item) {
+            out.push(item);
+        }
+    }
+    out
 }
 
 /// Names each entry of `items` at most once; `what` says what they are (`--objects`).
@@ -117,6 +148,11 @@ mod tests {
         assert!(e.to_string().contains("is a directory"), "{e}");
         // A bare file name lives in the working directory, which exists.
         assert!(check_outputs(&[], &[("--out", Path::new("x.csv"))]).is_ok());
+        // A device is no file to overwrite: both outputs may go there.
+        let null = Path::new("/dev/null");
+        if null.exists() {
+            assert!(check_outputs(&[], &[("--json", null), ("--bop", null)]).is_ok());
+        }
     }
 
     #[test]
@@ -125,5 +161,8 @@ mod tests {
         let e = refuse_repeats(&items, "--objects").unwrap_err();
         assert_eq!(e.to_string(), "--objects: `mug` is given twice");
         assert!(refuse_repeats(&items[..2], "--objects").is_ok());
+        // Interleaved rows of two objects (as the pose sinks write them) name two objects.
+        let rows = ["drill", "mug", "drill", "mug"].map(String::from);
+        assert_eq!(first_of_each(rows), ["drill", "mug"]);
     }
 }

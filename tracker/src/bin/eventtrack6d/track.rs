@@ -134,9 +134,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     let names: Vec<String> = if !args.objects.is_empty() {
         args.objects.clone()
     } else if !first_poses.is_empty() {
-        let mut n: Vec<String> = first_poses.iter().map(|r| r.object.clone()).collect();
-        n.dedup();
-        n
+        crate::paths::first_of_each(first_poses.iter().map(|r| r.object.clone()))
     } else {
         if rec.ground_truth.is_none() {
             bail!(
@@ -161,8 +159,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             }
             (r.t_us, r.pose)
         } else if let Some(path) = &args.first_poses {
-            let mut there: Vec<&str> = first_poses.iter().map(|r| r.object.as_str()).collect();
-            there.dedup();
+            let there = crate::paths::first_of_each(first_poses.iter().map(|r| r.object.clone()));
             bail!(
                 "--first-poses {}: no first pose for `{name}` (objects there: {})",
                 path.display(),
