@@ -241,6 +241,41 @@ pub(super) fn check(config: &GenerateConfig) -> Result<(), GenerateError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any `--with` text gives a companion or an error quoting it; it never panics.
+        #[test]
+        fn any_companion_text_parses_or_quotes_it(spec in "[a-z_.:,0-9 eE+-]{0,30}") {
+            match Companion::parse(&spec, 1, MotionProfile::Shake, SpeedLevel::Slow) {
+                Ok(c) => {
+                    let name = spec.split(':').next().unwrap_or_default().trim();
+                    match &c.object {
+                        ObjectSource::Library(kind) => prop_assert_eq!(kind.name(), name),
+                        ObjectSource::File(path) => prop_assert_eq!(path.to_str(), Some(name)),
+                    }
+                }
+                Err(e) => prop_assert!(e.starts_with(&format!("`{spec}`: ")), "{}", e),
+            }
+        }
+
+        /// A companion written out in full reads back as itself.
+        #[test]
+        fn a_written_companion_reads_back(
+            kind in proptest::sample::select(ObjectKind::ALL.to_vec()),
+            motion in proptest::sample::select(MotionProfile::ALL.to_vec()),
+            speed in proptest::sample::select(SpeedLevel::ALL.to_vec()),
+            offset in proptest::array::uniform3(-1.0f64..1.0),
+        ) {
+            let spec = format!(
+                "{}:{}:{}:{},{},{}",
+                kind.name(), motion.name(), speed.name(), offset[0], offset[1], offset[2]
+            );
+            let c = Companion::parse(&spec, 3, MotionProfile::Shake, SpeedLevel::Slow)
+                .map_err(TestCaseError::fail)?;
+            prop_assert_eq!(c, Companion { object: ObjectSource::Library(kind), motion, speed, offset_m: offset });
+        }
+    }
 
     #[test]
     fn companion_specs_parse_with_defaults_and_name_what_is_wrong() {

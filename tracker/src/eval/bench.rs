@@ -327,6 +327,43 @@ pub fn open_sequence(sequence: &SuiteSequence) -> Result<(Recording, Vec<Tick>),
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any `--methods` entry builds a method or an error quoting it; it never panics.
+        #[test]
+        fn any_method_spec_builds_or_quotes_it(spec in "[a-z0-9@:.,-]{0,24}") {
+            match method_from_spec(&spec) {
+                Ok(m) => prop_assert!(!m.name().is_empty()),
+                Err(e) => prop_assert!(e.contains(&format!("`{}`", spec.trim())), "{}", e),
+            }
+        }
+
+        /// A perturbed tracker method written as `NAME@DEG:CM[:SEED]` builds, and reports the perturbation.
+        #[test]
+        fn written_perturbed_methods_build(
+            name in proptest::sample::select(vec!["eventtrack6d", "depth30", "events-only"]),
+            degrees in 0u32..=180,
+            centimetres in 0u32..=100,
+            seed in proptest::option::of(0u64..1000),
+        ) {
+            let spec = match seed {
+                Some(s) => format!("{name}@{degrees}:{centimetres}:{s}"),
+                None => format!("{name}@{degrees}:{centimetres}"),
+            };
+            let m = method_from_spec(&spec).map_err(TestCaseError::fail)?;
+            let expected = format!("{name}@{degrees},{centimetres}");
+            prop_assert!(m.name().starts_with(&expected), "{} for {}", m.name(), spec);
+        }
+
+        /// `gt-noise:MM:DEG` with any two numbers >= 0 builds under its own name.
+        #[test]
+        fn written_gt_noise_methods_build(mm in 0.0f64..50.0, deg in 0.0f64..30.0) {
+            let spec = format!("gt-noise:{mm}:{deg}");
+            let m = method_from_spec(&spec).map_err(TestCaseError::fail)?;
+            prop_assert_eq!(m.name(), spec.as_str());
+        }
+    }
 
     #[test]
     fn tracker_methods_are_built_on_the_given_parameters() {
