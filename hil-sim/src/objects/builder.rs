@@ -279,6 +279,30 @@ mod tests {
             [UvRect::new(0.0, 0.0, 1.0, 1.0); 6],
         );
         assert_eq!(b.triangles.len(), 12);
+        // Closed: with corners welded by position, every edge is used once in each direction.
+        let corner = |i: u32| {
+            let p = b.positions[i as usize];
+            [p.x, p.y, p.z].map(|c| (c * 1e6).round() as i64)
+        };
+        let mut edges = std::collections::HashMap::new();
+        for t in &b.triangles {
+            for (x, y) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                *edges.entry((corner(x), corner(y))).or_insert(0) += 1;
+            }
+        }
+        assert_eq!(
+            edges.len(),
+            36,
+            "12 triangles of a closed box have 36 directed edges"
+        );
+        for (&(a, c), &n) in &edges {
+            assert_eq!(n, 1, "edge {a:?} -> {c:?} used {n} times");
+            assert_eq!(
+                edges.get(&(c, a)),
+                Some(&1),
+                "edge {a:?} -> {c:?} has no twin"
+            );
+        }
         for (p, n) in b.positions.iter().zip(&b.normals) {
             // Each vertex lies on the face its normal names.
             let d = p.coords.dot(n);

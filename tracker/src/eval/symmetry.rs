@@ -119,9 +119,20 @@ mod tests {
                 .max()
                 < 1e-12
         );
-        // Every transform keeps the axis point fixed.
-        for x in &t {
+        // Every transform keeps the axis point fixed, and the k-th turns a point off the axis by k steps of
+        // 2 pi / 315 about it.
+        for (k, x) in t.iter().enumerate() {
             assert!((x * Point3::new(0.1, 0.0, 0.3) - Point3::new(0.1, 0.0, 0.3)).norm() < 1e-12);
+            let off = x * Point3::new(0.2, 0.0, 0.3) - Point3::new(0.1, 0.0, 0.3);
+            assert!((off.norm() - 0.1).abs() < 1e-12 && off.z.abs() < 1e-12);
+            let angle = off.y.atan2(off.x).rem_euclid(std::f64::consts::TAU);
+            let expected =
+                (k as f64 * std::f64::consts::TAU / 315.0).rem_euclid(std::f64::consts::TAU);
+            let diff = (angle - expected).abs();
+            assert!(
+                diff.min(std::f64::consts::TAU - diff) < 1e-9,
+                "step {k}: {angle} rad"
+            );
         }
     }
 

@@ -427,7 +427,9 @@ mod tests {
     proptest! {
         #[test]
         fn any_parameters_give_a_time_or_a_reason(parameters in ".{0,40}", offset in any::<i64>()) {
-            let _ = requested_time(&parameters, offset);
+            if let Err(e) = requested_time(&parameters, offset) {
+                prop_assert!(matches!(&e, PoseQueryError::BadParameters(m) if !m.is_empty()), "{:?}", e);
+            }
         }
 
         #[test]
