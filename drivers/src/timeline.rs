@@ -148,6 +148,13 @@ impl TriggerTimeline {
         self.period_us
     }
 
+    /// When the next pulse's rising edge is due on the event camera's clock, microseconds: one period estimate
+    /// after the open pulse's rising edge, else after the latest tick. `None` before the first pulse.
+    pub fn next_pulse_due_us(&self) -> Option<i64> {
+        let last = self.pending_rise.or(self.last_tick.map(|(_, t)| t))?;
+        Some(last + self.period_us.round() as i64)
+    }
+
     /// Feeds one edge. A tick becomes available once its pulse's falling edge (or the next rising edge) is seen.
     pub fn push(&mut self, edge: TriggerEdge) {
         if edge.channel != self.config.channel {

@@ -76,13 +76,78 @@ fn a_fast_replay_with_jittered_depth_latency_gives_the_offline_poses_exactly() {
     assert!(per_frame > 3.0 && per_frame < 6.0, "{counters:?}");
 }
 
+/// Trigger pulses missing from the stream (a depth-coded one, two in a row, a single one): the timeline places
+/// a tick in each gap, and the runtime holds the events from the time a missing pulse was due until the next
+/// pulse comes, so each tick placed in a gap sees only the events before it, as offline. Before the hold, the
+/// runtime handed those events over at once and the ticks in the gaps saw up to a period of later events.
+#[test]
+fn a_fast_replay_with_missing_trigger_pulses_gives_the_offline_poses_exactly() {
+    let summary_missing = replay_matches_offline_with(0, 0, &[8, 13, 14, 30]);
+    assert_eq!(summary_missing, 4);
+}
+
 /// Replays the two-object scene offline and through the runtime with depth frames `latency_us` late plus up to
 /// `jitter_us`, checks both gave the same estimates and counters, and returns the counters.
 fn replay_matches_offline(latency_us: i64, jitter_us: i64) -> TrackerCounters {
     let dir = tempfile::tempdir().unwrap();
     let rec_dir = dir.path().join("rec");
     let rec = mug_and_can_recording(&rec_dir);
+    compare_replay_with_offline(dir.path(), &rec_dir, rec, latency_us, jitter_us).0
+}
 
+/// [`replay_matches_offline`] on a copy of the scene whose events lack the trigger pulses `dropped` (counting
+/// rising edges on the tick channel from 0); returns how many ticks the runtime's timeline synthesised.
+fn replay_matches_offline_with(latency_us: i64, jitter_us: i64, dropped: &[usize]) -> u64 {
+    use drivers::event::EventBuffer;
+    use drivers::raw::{RawReader, RawWriter};
+    let dir = tempfile::tempdir().unwrap();
+    let rec_dir = dir.path().join("rec");
+    mug_and_can_recording(&rec_dir);
+    let events = rec_dir.join("events.raw");
+    let mut reader = RawReader::open(&events).unwrap();
+    let thinned = rec_dir.join("events.thinned.raw");
+    let mut writer = RawWriter::new(
+        std::io::BufWriter::new(std::fs::File::create(&thinned).unwrap()),
+        &reader.header().clone(),
+    )
+    .unwrap();
+    let (mut rising, mut dropping, mut removed) = (0usize, false, 0usize);
+    let mut batch = EventBuffer::new();
+    while reader.read_chunk(&mut batch).unwrap() {
+        batch.triggers.retain(|e| {
+            if e.channel != 0 {
+                return true;
+            }
+            if e.rising {
+                dropping = dropped.contains(&rising);
+                rising += 1;
+            }
+            removed += usize::from(dropping);
+            !dropping
+        });
+        writer.write(&batch.cd, &batch.triggers).unwrap();
+        batch.clear();
+    }
+    writer.finish().unwrap();
+    assert_eq!(
+        removed,
+        2 * dropped.len(),
+        "each dropped pulse loses both edges"
+    );
+    std::fs::rename(&thinned, &events).unwrap();
+    let rec = drivers::recording::Recording::open(&rec_dir).unwrap();
+    compare_replay_with_offline(dir.path(), &rec_dir, rec, latency_us, jitter_us).1
+}
+
+/// Tracks `rec` offline and through the runtime, checks both gave the same estimates and counters, and returns
+/// the counters and how many ticks the runtime's timeline synthesised.
+fn compare_replay_with_offline(
+    dir: &std::path::Path,
+    rec_dir: &std::path::Path,
+    rec: drivers::recording::Recording,
+    latency_us: i64,
+    jitter_us: i64,
+) -> (TrackerCounters, u64) {
     // Offline, as `bench` runs it.
     let scene = recording_scene(&rec, &[]).unwrap();
     let mut tracker = build_tracker(
@@ -122,7 +187,7 @@ fn replay_matches_offline(latency_us: i64, jitter_us: i64) -> TrackerCounters {
     let offline_counters = tracker.tracker_counters().expect("the tracker counts");
 
     // Through the runtime, with small event batches so that batch edges fall everywhere.
-    let out_dir = dir.path().join("out");
+    let out_dir = dir.join("out");
     let toml = format!(
         r#"
 [source]
@@ -190,13 +255,19 @@ enabled = false
     assert_eq!(summary.depth_frame_age.samples, stats.depth_frames);
     assert_eq!(summary.depth_arrival.samples, stats.depth_frames);
     let latency = latency_us as f64;
+    // A frame whose phase-coded pulse is missing goes out at the next pulse, a tick period later.
+    let missed = if summary.timeline.missing > 0 {
+        8_334.0
+    } else {
+        0.0
+    };
     for age in [
         summary.depth_frame_age.p50_us,
         summary.depth_frame_age.max_us,
     ] {
         let age = age.expect("ages recorded");
         assert!(
-            (latency - 1000.0..=latency + jitter_us as f64 + 250.0).contains(&age),
+            (latency - 1000.0..=latency + jitter_us as f64 + 250.0 + missed).contains(&age),
             "a frame {latency} us late reached the tracker {age} us after its exposure"
         );
     }
@@ -209,5 +280,6 @@ enabled = false
         stats.depth_frames,
         summary.depth_frame_age.p50_us.unwrap_or(0.0) * 1e-3
     )));
-    offline_counters
+    assert_eq!(summary.event_hold_overflows, 0);
+    (offline_counters, summary.timeline.missing)
 }

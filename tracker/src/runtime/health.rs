@@ -222,6 +222,9 @@ pub struct Health {
     pub depth_frames_deferred: u64,
     /// Depth frames that reached the tracker thread older than the tracker uses (`max_depth_age_ms`).
     pub depth_frames_too_old: u64,
+    /// Times a trigger outage held more events than [`super::pulse_hold::MAX_OVERDUE_EVENTS`], which were then
+    /// handed to the tracker before the ticks the timeline later placed in the gap.
+    pub event_hold_overflows: u64,
     /// Late depth frames handed over to be carried only, because the tracker thread had fallen behind
     /// ([`super::depth_arrival::DepthArrival::should_shed`]).
     pub depth_frames_shed: u64,
@@ -266,6 +269,7 @@ impl Health {
             depth_frame_age: LatencyHistogram::new(),
             depth_arrival: LatencyHistogram::new(),
             depth_frames_deferred: 0,
+            event_hold_overflows: 0,
             depth_frames_too_old: 0,
             depth_frames_shed: 0,
         }
@@ -351,6 +355,7 @@ impl Health {
                 "depth_frame_age_us": latency_json(&self.depth_frame_age.summary()),
                 "depth_frames_deferred": self.depth_frames_deferred,
                 "depth_frames_too_old": self.depth_frames_too_old,
+                "event_hold_overflows": self.event_hold_overflows,
                 "depth_frames_shed": self.depth_frames_shed,
                 "poses_revised": self.poses_revised,
                 "queue_max_batches": self.queue.max_depth,

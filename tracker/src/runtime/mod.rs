@@ -335,6 +335,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         depth_arrival: h.depth_arrival.summary(),
         depth_frames_deferred: h.depth_frames_deferred,
         depth_frames_too_old: h.depth_frames_too_old,
+        event_hold_overflows: h.event_hold_overflows,
         depth_frames_shed: h.depth_frames_shed,
         poses_revised: h.poses_revised,
         sinks: h

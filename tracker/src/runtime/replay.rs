@@ -1,9 +1,11 @@
 //! Recording replay: `events.raw` decoded chunk by chunk (`Recording::events`, the format's streaming decoder)
 //! into event batches and trigger edges, paced by the recording's clock (real time) or as fast as the tracker
-//! takes them, with each depth frame delivered when the trigger edge that completes its phase-coded pulse arrives
-//! (or, with a depth latency, when the stream reaches its exposure plus that latency, as a live depth camera's
-//! transport delivers it; if a tick pulse is open then, after the pulse's falling edge)
-//! (frames are read ahead on a helper thread so PNG decoding never delays the stream).
+//! takes them, with each depth frame delivered when the trigger edge that completes its phase-coded pulse arrives,
+//! or, when that pulse is missing from the stream, the next pulse's (frames numbered by the schedule from the
+//! first phase-coded pulse, as the timeline numbers depth ticks); with a depth latency, when the stream reaches
+//! its exposure plus that latency, as a live depth camera's transport delivers it (if a tick pulse is open then,
+//! after the pulse's falling edge). Frames are read ahead on a helper thread so PNG decoding never delays the
+//! stream.
 
 use super::config::Pace;
 use super::source::{Source, SourceError, SourceOutput, SourceStats, StopFlag};
@@ -125,7 +127,13 @@ struct Replayer<'a> {
     channel: u8,
     wide_threshold_us: i64,
     pending_rise: Option<i64>,
-    wide_pulses: u64,
+    /// The first phase-coded pulse's rising edge: depth exposure 0, from which the others follow every
+    /// `depth_period_us` (camera clock, microseconds).
+    depth_anchor_us: Option<i64>,
+    depth_period_us: f64,
+    tick_period_us: f64,
+    /// The next depth frame to deliver.
+    next_frame: u64,
     depth: Receiver<DepthItem>,
     next_depth: Option<DepthItem>,
     depth_done: bool,
@@ -136,6 +144,44 @@ struct Replayer<'a> {
 }
 
 impl Replayer<'_> {
+    /// At the falling edge of the tick pulse that rose at `rise`: the depth frames exposed up to that pulse go
+    /// out first, so the tracker has each before the tick the timeline makes of its exposure. The frames are
+    /// numbered by the schedule from the first phase-coded pulse, as the timeline numbers depth ticks, so a
+    /// phase-coded pulse missing from the stream (the depth camera still took its frame) shifts nothing: its
+    /// frame goes out, exposed when the schedule says, at the next pulse.
+    fn expose_depth_until(&mut self, rise: i64) {
+        let Some(anchor) = self.depth_anchor_us else {
+            return;
+        };
+        let half_tick = (self.tick_period_us * 0.5) as i64;
+        loop {
+            let due = anchor + (self.next_frame as f64 * self.depth_period_us).round() as i64;
+            if due > rise + half_tick {
+                break;
+            }
+            // This pulse's own exposure keeps its edge's time; a missed one takes the schedule's.
+            let exposed = if (rise - due).abs() <= half_tick {
+                rise
+            } else {
+                due
+            };
+            let n = self.next_frame;
+            self.next_frame += 1;
+            match self.depth_frame(n) {
+                Some(frame) if !self.transport.is_immediate() => {
+                    let arrives = self.transport.due_us(exposed);
+                    self.in_transit
+                        .push_back((exposed, arrives, Box::new(frame)));
+                }
+                Some(frame) => {
+                    self.stats.depth_frames += 1;
+                    self.out.depth(exposed, Box::new(frame));
+                }
+                None => self.stats.depth_missing += 1,
+            }
+        }
+    }
+
     fn flush(&mut self) {
         if let Some(last) = self.batch.last() {
             self.pacer.until(last.t_us);
@@ -210,23 +256,10 @@ impl Replayer<'_> {
                 self.pending_rise = Some(edge.t_us);
             } else if let Some(rise) = self.pending_rise.take() {
                 closed = true;
-                if edge.t_us - rise >= self.wide_threshold_us {
-                    // The falling edge of a phase-coded pulse: its depth frame goes first, so the tracker has
-                    // it before the tick that the timeline makes of this pulse.
-                    let n = self.wide_pulses;
-                    self.wide_pulses += 1;
-                    match self.depth_frame(n) {
-                        Some(frame) if !self.transport.is_immediate() => {
-                            let due = self.transport.due_us(rise);
-                            self.in_transit.push_back((rise, due, Box::new(frame)));
-                        }
-                        Some(frame) => {
-                            self.stats.depth_frames += 1;
-                            self.out.depth(rise, Box::new(frame));
-                        }
-                        None => self.stats.depth_missing += 1,
-                    }
+                if self.depth_anchor_us.is_none() && edge.t_us - rise >= self.wide_threshold_us {
+                    self.depth_anchor_us = Some(rise);
                 }
+                self.expose_depth_until(rise);
             }
         }
         self.out.trigger(edge);
@@ -267,7 +300,10 @@ impl Source for ReplaySource {
             channel: schedule.channel,
             wide_threshold_us: (schedule.narrow_width_us + schedule.wide_width_us) / 2,
             pending_rise: None,
-            wide_pulses: 0,
+            depth_anchor_us: None,
+            depth_period_us: f64::from(schedule.ticks_per_depth) * 1e6 / schedule.tick_rate_hz,
+            tick_period_us: 1e6 / schedule.tick_rate_hz,
+            next_frame: 0,
             depth: spawn_depth_reader(&self.recording, stop.clone()),
             next_depth: None,
             depth_done: false,

@@ -49,6 +49,8 @@ pub struct Summary {
     pub depth_frames_deferred: u64,
     /// Depth frames that arrived older than the tracker uses (`max_depth_age_ms`).
     pub depth_frames_too_old: u64,
+    /// Times a trigger outage held more events than the runtime holds (handed over early).
+    pub event_hold_overflows: u64,
     /// Late depth frames carried only, because the tracker thread had fallen behind.
     pub depth_frames_shed: u64,
     /// Estimates of published ticks the tracker revised afterwards, handed to the sinks (the pose queries answer
@@ -117,6 +119,14 @@ impl std::fmt::Display for Summary {
             self.queue.dropped_batches,
             self.sinks.iter().map(|s| s.counters.dropped).sum::<u64>()
         )?;
+        if self.event_hold_overflows > 0 {
+            writeln!(
+                f,
+                "trigger outage:  {} times more events waited for a missing pulse than are held; they reached \
+                 the tracker before the ticks placed in the gap",
+                self.event_hold_overflows
+            )?;
+        }
         writeln!(
             f,
             "timeline:        {} pulses, {} missing, {} gaps ({} ticks not bridged), {} extra, {} jittered, {} phase errors; depth frames {} ({} missing)",

@@ -218,7 +218,9 @@ impl Worker {
                     self.hold.events(&events, self.tracker.as_mut());
                     let n = events.len() as u64;
                     self.queue.recycle(events);
-                    self.health().events += n;
+                    let mut h = self.health();
+                    h.events += n;
+                    h.event_hold_overflows = self.hold.overflows();
                 }
                 Ingest::Depth { t_us, frame } => {
                     self.check_depth_age(t_us);
@@ -232,6 +234,7 @@ impl Worker {
                         self.tick(&tick, decoded_at);
                     }
                     self.hold.edge(&edge, self.tracker.as_mut());
+                    self.hold.set_due(self.timeline.next_pulse_due_us());
                 }
                 Ingest::End => {
                     self.timeline.finish();
