@@ -256,7 +256,23 @@ proptest::proptest! {
         lines.push(noise);
         match parse(&lines.join("\n")) {
             Ok(c) => {
-                proptest::prop_assert!(c.validate("again.toml").is_ok());
+                // What was accepted is what the file says (or the default where it says nothing).
+                let doc: toml::Value = toml::from_str(&lines.join("\n")).expect("an accepted file is TOML");
+                let int = |table: &str, key: &str| doc.get(table).and_then(|t| t.get(key)).and_then(toml::Value::as_integer);
+                let text = |table: &str, key: &str| doc.get(table).and_then(|t| t.get(key)).and_then(toml::Value::as_str);
+                proptest::prop_assert_eq!(
+                    c.queue.event_batches as i64,
+                    int("queue", "event_batches").unwrap_or(QueueConfig::default().event_batches as i64)
+                );
+                proptest::prop_assert_eq!(
+                    c.status.period_ms as i64,
+                    int("status", "period_ms").unwrap_or(StatusConfig::default().period_ms as i64)
+                );
+                let default_method = TrackerConfig::default().method;
+                proptest::prop_assert_eq!(
+                    c.tracker.method.as_str(),
+                    text("tracker", "method").unwrap_or(default_method.as_str())
+                );
             }
             Err(e) => {
                 let message = e.to_string();
