@@ -32,6 +32,11 @@ pub struct RunArgs {
 /// Runs the command.
 pub fn run(args: &RunArgs) -> Result<()> {
     let mut config = Config::load(&args.config)?;
+    if let Ok(text) = std::fs::read_to_string(&args.config) {
+        for note in config.unused_tables(&text) {
+            eprintln!("warning: {}: {note}", args.config.display());
+        }
+    }
     if let Some(p) = &args.latency_log {
         config.output.latency_log = Some(session::from_working_dir(p)?);
     }

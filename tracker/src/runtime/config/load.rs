@@ -33,6 +33,37 @@ impl Config {
         Ok(config)
     }
 
+    /// The tables of the TOML `text` this configuration was read from that it does not use, each with why: a
+    /// source table other than the chosen source's, `[zenoh]` with the zenoh sink off, `[can]` keys other than
+    /// `enabled` with CAN off. A user who edited one of them expects it to matter, so `run` warns about each.
+    pub fn unused_tables(&self, text: &str) -> Vec<String> {
+        let Ok(doc) = toml::from_str::<toml::Table>(text) else {
+            return Vec::new();
+        };
+        let kind = self.source.kind.as_str();
+        let mut unused = Vec::new();
+        for (table, used) in [
+            ("demo", self.source.kind == SourceKind::Demo),
+            ("replay", self.source.kind == SourceKind::Replay),
+            ("live", self.source.kind == SourceKind::Live),
+        ] {
+            if !used && doc.contains_key(table) {
+                unused.push(format!("[{table}] is not used: [source] kind is `{kind}`"));
+            }
+        }
+        if !self.sinks.zenoh && doc.contains_key("zenoh") {
+            unused.push("[zenoh] is not used: [sinks] zenoh is false".into());
+        }
+        let can_keys = doc
+            .get("can")
+            .and_then(toml::Value::as_table)
+            .is_some_and(|t| t.keys().any(|k| k != "enabled"));
+        if !self.can.enabled && can_keys {
+            unused.push("[can] is not used: [can] enabled is false".into());
+        }
+        unused
+    }
+
     /// Makes every relative path absolute-or-relative to `base` (the configuration file's directory).
     pub fn resolve_paths(&mut self, base: &Path) {
         let join = |p: &mut PathBuf| {

@@ -209,6 +209,36 @@ fn shipped_configurations_load_and_the_rig_says_live_is_not_there_yet() {
     assert!(e.contains("eventtrack6d demo"), "{e}");
 }
 
+#[test]
+fn tables_the_configuration_does_not_use_are_named() {
+    let text = "[source]\nkind = \"replay\"\n[replay]\nrecording = \"r\"\n[demo]\nseed = 3\n\
+                [sinks]\nzenoh = false\n[zenoh]\ndomain_id = 5\n[can]\nenabled = false\ninterface = \"can1\"\n";
+    let c = parse(text).unwrap();
+    let unused = c.unused_tables(text);
+    assert_eq!(
+        unused,
+        [
+            "[demo] is not used: [source] kind is `replay`",
+            "[zenoh] is not used: [sinks] zenoh is false",
+            "[can] is not used: [can] enabled is false",
+        ]
+    );
+    // The shipped files use what they set.
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../config");
+    let mut checked = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let text = std::fs::read_to_string(&path).unwrap();
+            let c = parse(&text).unwrap();
+            let unused = c.unused_tables(&text);
+            assert!(unused.is_empty(), "{}: {unused:?}", path.display());
+            checked += 1;
+        }
+    }
+    assert!(checked >= 2, "{checked} shipped configurations");
+}
+
 /// A TOML value of any type, in or out of range.
 fn any_value() -> impl proptest::strategy::Strategy<Value = String> {
     use proptest::prelude::*;
