@@ -217,6 +217,21 @@ fn inconsistent_geometry_and_bad_json_are_named() {
         "meta.json",
         "invalid",
     );
+    // A misspelt key is not the default in disguise.
+    expect_error(
+        |d| {
+            let mut rig = serde_json::to_value(rig()).unwrap();
+            let scale = rig
+                .as_object_mut()
+                .unwrap()
+                .remove("depth_scale_m")
+                .unwrap();
+            rig["depth_scale"] = scale;
+            std::fs::write(d.join("camera.json"), rig.to_string()).unwrap();
+        },
+        "camera.json",
+        "depth_scale",
+    );
     // A schedule no timeline can follow.
     for (key, value, words) in [
         ("ticks_per_depth", "0", "ticks_per_depth is 0"),

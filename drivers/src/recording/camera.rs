@@ -2,8 +2,9 @@
 
 use serde::{Deserialize, Serialize};
 
-/// A pinhole camera with OpenCV distortion, in pixels.
+/// A pinhole camera with OpenCV distortion, in pixels. Unknown keys are refused, like the rig's.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CameraIntrinsics {
     /// Image width, pixels.
     pub width: u32,
@@ -52,8 +53,10 @@ impl CameraIntrinsics {
     }
 }
 
-/// The sensor rig: event camera (the master frame), depth camera, and `T_event_depth`.
+/// The sensor rig: event camera (the master frame), depth camera, and `T_event_depth`. Unknown keys are
+/// refused: a misspelt `depth_scale_m` would otherwise fall back to millimetres without a word.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CameraRig {
     /// The event camera (EVK4: 1280x720).
     pub event_camera: CameraIntrinsics,
