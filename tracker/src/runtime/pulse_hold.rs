@@ -10,14 +10,16 @@
 //! A pulse can also go missing. The timeline learns so only at the next pulse, and then places a tick between
 //! the two. So events from the time the next pulse was due are held too, until a pulse comes: handed over at
 //! once, they would reach the tick placed in the gap, which saw none of them offline. Normally the pulse comes
-//! within its jitter of that time and the hold merely starts a few microseconds early. An outage holds at most
-//! [`MAX_OVERDUE_EVENTS`]; beyond that the held events are handed over and the overflow is counted.
+//! within its jitter of that time and the hold merely starts a little early (the worker sets the due time an
+//! eighth of a period ahead, so a tick placed in a gap a little before the schedule also sees only earlier
+//! events). The hold keeps at most [`MAX_OVERDUE_EVENTS`]; beyond that the held events are handed over and the
+//! overflow is counted.
 
 use crate::track::PoseTracker;
 use drivers::event::{CdEvent, TriggerEdge};
 
-/// Most events held while a pulse is overdue (64 MiB of events): about 0.1-1 s of a busy event camera, more than
-/// the timeline bridges at 10 Mev/s and above.
+/// Most events held (64 MiB of events), while a pulse is open or overdue: about 0.1-1 s of a busy event camera.
+/// A trigger that stops, open or closed, would otherwise hold events without end.
 pub const MAX_OVERDUE_EVENTS: usize = 4 << 20;
 
 /// Events held while a pulse on the tick channel is open or overdue. Steady state does not allocate once the
@@ -64,7 +66,7 @@ impl PulseHold {
             tracker.push_events(&events[..split]);
         }
         self.held.extend_from_slice(&events[split..]);
-        if !self.open && self.held.len() > MAX_OVERDUE_EVENTS {
+        if self.held.len() > MAX_OVERDUE_EVENTS {
             self.overflows += 1;
             self.release_events(tracker);
         }
@@ -79,17 +81,17 @@ impl PulseHold {
         }
     }
 
-    /// After the ticks that `edge` completed were estimated: a falling edge on the tick channel closes the pulse
-    /// and hands over what was held; a rising edge opens one. What is held at a rising edge stays held: it may
-    /// come after a tick the timeline has yet to place in a gap before this pulse, and [`Self::release_until`]
-    /// hands it over tick by tick.
+    /// After the ticks that `edge` completed were estimated: a falling edge on the tick channel closes the open
+    /// pulse and hands over what was held; a rising edge opens one. What is held at a rising edge, or at a
+    /// falling edge whose rising edge was lost, stays held: it may come after a tick the timeline has yet to
+    /// place in a gap, and [`Self::release_until`] hands it over tick by tick.
     pub fn edge(&mut self, edge: &TriggerEdge, tracker: &mut dyn PoseTracker) {
         if edge.channel != self.channel {
             return;
         }
         if edge.rising {
             self.open = true;
-        } else {
+        } else if self.open {
             self.release_all(tracker);
         }
     }
@@ -223,6 +225,24 @@ mod tests {
         hold.edge(&edge(16767, 0, false), &mut seen);
         assert_eq!(seen.0, [8000, 8333, 9000, 16000, 16700]);
         assert_eq!(hold.overflows(), 0);
+    }
+
+    #[test]
+    fn a_falling_edge_without_its_rising_edge_keeps_what_waits_for_a_gap() {
+        let mut hold = PulseHold::new(0);
+        let mut seen = Seen::default();
+        hold.edge(&edge(0, 0, true), &mut seen);
+        hold.edge(&edge(100, 0, false), &mut seen);
+        hold.set_due(Some(8333));
+        hold.events(&[ev(8000), ev(8400)], &mut seen);
+        // The next pulse's rising edge is lost: its falling edge hands nothing over, since the timeline may
+        // still place a tick before 8400.
+        hold.edge(&edge(8433, 0, false), &mut seen);
+        assert_eq!(seen.0, [8000]);
+        hold.release_until(8333, &mut seen);
+        assert_eq!(seen.0, [8000]);
+        hold.release_until(16667, &mut seen);
+        assert_eq!(seen.0, [8000, 8400]);
     }
 
     #[test]

@@ -127,9 +127,9 @@ struct Replayer<'a> {
     channel: u8,
     wide_threshold_us: i64,
     pending_rise: Option<i64>,
-    /// The first phase-coded pulse's rising edge: depth exposure 0, from which the others follow every
-    /// `depth_period_us` (camera clock, microseconds).
-    depth_anchor_us: Option<i64>,
+    /// The latest phase-coded pulse's rising edge (camera clock, microseconds) and its depth frame: the frames
+    /// after it follow every `depth_period_us`.
+    depth_anchor: Option<(i64, u64)>,
     depth_period_us: f64,
     tick_period_us: f64,
     /// The next depth frame to deliver.
@@ -144,41 +144,60 @@ struct Replayer<'a> {
 }
 
 impl Replayer<'_> {
-    /// At the falling edge of the tick pulse that rose at `rise`: the depth frames exposed up to that pulse go
-    /// out first, so the tracker has each before the tick the timeline makes of its exposure. The frames are
-    /// numbered by the schedule from the first phase-coded pulse, as the timeline numbers depth ticks, so a
-    /// phase-coded pulse missing from the stream (the depth camera still took its frame) shifts nothing: its
-    /// frame goes out, exposed when the schedule says, at the next pulse.
-    fn expose_depth_until(&mut self, rise: i64) {
-        let Some(anchor) = self.depth_anchor_us else {
-            return;
-        };
+    /// At the falling edge of the tick pulse that rose at `rise` (phase-coded or not): the depth frames exposed up
+    /// to that pulse go out first, so the tracker has each before the tick the timeline makes of its exposure.
+    /// A phase-coded pulse's frame number follows from the previous phase-coded pulse's and the number of depth
+    /// periods between them (as the timeline re-locks its schedule), so the count stays right when a phase-coded
+    /// pulse is missing, and the trigger clock's drift against the nominal rate never adds up. The frame of a
+    /// missing phase-coded pulse goes out at the first pulse after its time, stamped by that schedule.
+    fn expose_depth_until(&mut self, rise: i64, wide: bool) {
         let half_tick = (self.tick_period_us * 0.5) as i64;
-        loop {
-            let due = anchor + (self.next_frame as f64 * self.depth_period_us).round() as i64;
-            if due > rise + half_tick {
-                break;
-            }
-            // This pulse's own exposure keeps its edge's time; a missed one takes the schedule's.
-            let exposed = if (rise - due).abs() <= half_tick {
-                rise
-            } else {
-                due
+        if wide {
+            let n = match self.depth_anchor {
+                None => 0,
+                Some((at, n)) => {
+                    let periods = ((rise - at) as f64 / self.depth_period_us).round().max(1.0);
+                    n + periods as u64
+                }
             };
-            let n = self.next_frame;
-            self.next_frame += 1;
-            match self.depth_frame(n) {
-                Some(frame) if !self.transport.is_immediate() => {
-                    let arrives = self.transport.due_us(exposed);
-                    self.in_transit
-                        .push_back((exposed, arrives, Box::new(frame)));
-                }
-                Some(frame) => {
-                    self.stats.depth_frames += 1;
-                    self.out.depth(exposed, Box::new(frame));
-                }
-                None => self.stats.depth_missing += 1,
+            while self.next_frame < n {
+                let k = self.next_frame;
+                let exposed = self.scheduled_exposure(k).unwrap_or(rise);
+                self.send_depth(k, exposed);
             }
+            if self.next_frame == n {
+                self.send_depth(n, rise);
+            }
+            self.depth_anchor = Some((rise, n));
+        } else {
+            while let Some(due) = self.scheduled_exposure(self.next_frame)
+                && due <= rise + half_tick
+            {
+                self.send_depth(self.next_frame, due);
+            }
+        }
+    }
+
+    /// When frame `k` is exposed by the schedule from the latest phase-coded pulse (`None` before the first).
+    fn scheduled_exposure(&self, k: u64) -> Option<i64> {
+        let (at, n) = self.depth_anchor?;
+        Some(at + ((k as f64 - n as f64) * self.depth_period_us).round() as i64)
+    }
+
+    /// Sends depth frame `k`, exposed at `exposed` (or puts it in transit), and moves on to the next frame.
+    fn send_depth(&mut self, k: u64, exposed: i64) {
+        self.next_frame = k + 1;
+        match self.depth_frame(k) {
+            Some(frame) if !self.transport.is_immediate() => {
+                let arrives = self.transport.due_us(exposed);
+                self.in_transit
+                    .push_back((exposed, arrives, Box::new(frame)));
+            }
+            Some(frame) => {
+                self.stats.depth_frames += 1;
+                self.out.depth(exposed, Box::new(frame));
+            }
+            None => self.stats.depth_missing += 1,
         }
     }
 
@@ -256,10 +275,8 @@ impl Replayer<'_> {
                 self.pending_rise = Some(edge.t_us);
             } else if let Some(rise) = self.pending_rise.take() {
                 closed = true;
-                if self.depth_anchor_us.is_none() && edge.t_us - rise >= self.wide_threshold_us {
-                    self.depth_anchor_us = Some(rise);
-                }
-                self.expose_depth_until(rise);
+                let wide = edge.t_us - rise >= self.wide_threshold_us;
+                self.expose_depth_until(rise, wide);
             }
         }
         self.out.trigger(edge);
@@ -300,7 +317,7 @@ impl Source for ReplaySource {
             channel: schedule.channel,
             wide_threshold_us: (schedule.narrow_width_us + schedule.wide_width_us) / 2,
             pending_rise: None,
-            depth_anchor_us: None,
+            depth_anchor: None,
             depth_period_us: f64::from(schedule.ticks_per_depth) * 1e6 / schedule.tick_rate_hz,
             tick_period_us: 1e6 / schedule.tick_rate_hz,
             next_frame: 0,

@@ -234,7 +234,11 @@ impl Worker {
                         self.tick(&tick, decoded_at);
                     }
                     self.hold.edge(&edge, self.tracker.as_mut());
-                    self.hold.set_due(self.timeline.next_pulse_due_us());
+                    // An eighth of a period early: a tick the timeline places in a gap lies halfway between its
+                    // neighbours, so before the schedule when the pulse after the gap comes early.
+                    let margin = (self.timeline.period_us() / 8.0) as i64;
+                    self.hold
+                        .set_due(self.timeline.next_pulse_due_us().map(|due| due - margin));
                 }
                 Ingest::End => {
                     self.timeline.finish();
