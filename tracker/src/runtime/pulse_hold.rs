@@ -10,9 +10,9 @@
 //! A pulse can also go missing. The timeline learns so only at the next pulse, and then places a tick between
 //! the two. So events from the time the next pulse was due are held too, until a pulse comes: handed over at
 //! once, they would reach the tick placed in the gap, which saw none of them offline. Normally the pulse comes
-//! within its jitter of that time and the hold merely starts a little early (the worker sets the due time an
-//! eighth of a period ahead, so a tick placed in a gap a little before the schedule also sees only earlier
-//! events). The hold keeps at most [`MAX_OVERDUE_EVENTS`]; beyond that the held events are handed over and the
+//! within its jitter of that time and the hold merely starts a little early (the worker sets the due time the
+//! timeline's jitter tolerance, 50 us, ahead, so a tick placed in a gap a little before the schedule also sees
+//! only earlier events). The hold keeps at most [`MAX_OVERDUE_EVENTS`]; beyond that the held events are handed over and the
 //! overflow is counted.
 
 use crate::track::PoseTracker;

@@ -234,9 +234,11 @@ impl Worker {
                         self.tick(&tick, decoded_at);
                     }
                     self.hold.edge(&edge, self.tracker.as_mut());
-                    // An eighth of a period early: a tick the timeline places in a gap lies halfway between its
-                    // neighbours, so before the schedule when the pulse after the gap comes early.
-                    let margin = (self.timeline.period_us() / 8.0) as i64;
+                    // The jitter tolerance early: a tick the timeline places in a gap lies halfway between its
+                    // neighbours, so before the schedule when the pulse after the gap comes early (by up to twice
+                    // the tolerance before it counts as jittered). Wider, the hold would delay more events to the
+                    // tick's own latency.
+                    let margin = self.timeline.config().jitter_tolerance_us;
                     self.hold
                         .set_due(self.timeline.next_pulse_due_us().map(|due| due - margin));
                 }
