@@ -2,6 +2,9 @@
 //! input, the same object or method twice, first poses that do not cover the objects, ground truth that covers
 //! none of the ticks. Each case names what is wrong, exits non-zero and never panics.
 
+mod common;
+
+use common::cli::{eventtrack6d, fails_with};
 use drivers::event::CdEvent;
 use drivers::recording::{
     CameraIntrinsics, CameraRig, ModelInfo, PoseSample, RecordingMeta, RecordingWriter,
@@ -9,25 +12,6 @@ use drivers::recording::{
 };
 use drivers::timeline::{TimelineConfig, ideal_edges};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn eventtrack6d(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_eventtrack6d"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn fails_with(args: &[&str], needle: &str) {
-    let out = eventtrack6d(args);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "{args:?} succeeded");
-    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-    assert!(
-        stderr.contains(needle),
-        "{args:?}: expected `{needle}` in: {stderr}"
-    );
-}
 
 /// A 0.1 s recording (12 ticks, 3 depth frames) of a small tetrahedron `can` whose ground truth lies at `gt_us`.
 fn recording(dir: &Path, gt_us: &[i64]) {

@@ -1,21 +1,9 @@
 //! `eventtrack6d eval` and `bench` refuse bad input with a clear error naming it, never a panic.
 
-use std::path::Path;
-use std::process::Command;
+mod common;
 
-fn fails_with(args: &[&str], needle: &str) {
-    let out = Command::new(env!("CARGO_BIN_EXE_eventtrack6d"))
-        .args(args)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "{args:?} succeeded");
-    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-    assert!(
-        stderr.contains(needle),
-        "{args:?}: expected `{needle}` in: {stderr}"
-    );
-}
+use common::cli::fails_with;
+use std::path::Path;
 
 #[test]
 fn eval_bad_inputs() {

@@ -1,5 +1,7 @@
-//! Hand-built meshes shared by the mesh and renderer tests.
+//! Hand-built meshes shared by the mesh and renderer tests, and a runner for the CLI tests (`cli`).
 #![allow(dead_code)]
+
+pub mod cli;
 
 use nalgebra::{Point3, Vector3};
 use std::sync::Arc;
