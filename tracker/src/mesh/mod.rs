@@ -1,5 +1,6 @@
 //! Triangle meshes of tracked objects and static background: loading (OBJ + MTL + PNG/JPEG texture), validation,
-//! measurements (bounding box, diameter), area-weighted surface sampling and BOP-style object information.
+//! measurements (bounding box, diameter), area-weighted surface sampling, BOP-style object information and render
+//! meshes simplified within a tolerance.
 //!
 //! All geometry is in the object frame, metres. A [`Mesh`] is immutable once built and always valid: non-empty, finite,
 //! indices in range, attribute arrays consistent.
@@ -8,12 +9,14 @@ mod error;
 mod info;
 mod measure;
 mod obj;
+mod simplify;
 pub(crate) mod texture;
 
 pub use error::{MeshError, MeshWarning};
 pub use info::{ObjectInfo, ObjectInfoError, Symmetry};
 pub use measure::{Aabb, SurfacePoint};
 pub use obj::{LoadedMesh, MeshLoadOptions, load_obj};
+pub use simplify::{Simplification, simplify_for_render};
 pub use texture::Texture;
 
 use nalgebra::{Point3, Vector3};
