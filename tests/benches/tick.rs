@@ -212,7 +212,7 @@ fn ticks(c: &mut Criterion) {
     bench_tracker(c, "cpu", &mut s);
     bench_cpu_of_tick(c, "cpu", &mut s);
     bench_paced(c, "cpu", &mut s, None);
-    let (mut s, spent) = timed_tracker(&rec, Box::new(CpuRenderer::new()), one_thread);
+    let (mut s, spent) = timed_tracker(&rec, Box::new(CpuRenderer::new()), one_thread.clone());
     bench_paced(c, "cpu", &mut s, Some(&spent));
     bench_render_share(c, "cpu", s, &spent);
     // `cpu_ahead`: the defaults, with which the tracker renders each next ROI ahead on the `render-ahead` thread.
@@ -233,6 +233,14 @@ fn ticks(c: &mut Criterion) {
     let ahead = RenderAhead::new(Box::new(CpuRenderer::new()));
     let (mut s, spent) = timed_tracker(&rec, Box::new(ahead), TrackerConfig::default());
     bench_paced(c, "cpu_ahead", &mut s, Some(&spent));
+    // `cpu_simplified`: as `cpu`, rendering the mug's mesh simplified (1,896 triangles: rendered as loaded by default,
+    // `render_mesh_simplify_above`).
+    let simplified = TrackerConfig {
+        render_mesh_simplify_above: 0,
+        ..one_thread
+    };
+    let mut s = steady_tracker(rec.clone(), simplified, Box::new(CpuRenderer::new()));
+    bench_tracker(c, "cpu_simplified", &mut s);
     match create_renderer(RendererKind::Gpu) {
         Ok(gpu) => {
             eprintln!("gpu renderer: {}", gpu.device());
@@ -252,6 +260,24 @@ fn ticks(c: &mut Criterion) {
                     bench_render_share(c, "gpu", s, &spent);
                 }
                 Err(e) => eprintln!("gpu render-share bench skipped: {e}"),
+            }
+            // `gpu_simplified`: the mug's mesh simplified (`render_mesh_simplify_above`).
+            let simplified = TrackerConfig {
+                render_mesh_simplify_above: 0,
+                ..TrackerConfig::default()
+            };
+            match (
+                create_renderer(RendererKind::Gpu),
+                create_renderer(RendererKind::Gpu),
+            ) {
+                (Ok(gpu), Ok(timed_gpu)) => {
+                    let mut s = steady_tracker(rec.clone(), simplified.clone(), gpu);
+                    bench_tracker(c, "gpu_simplified", &mut s);
+                    drop(s);
+                    let (s, spent) = timed_tracker(&rec, timed_gpu, simplified);
+                    bench_render_share(c, "gpu_simplified", s, &spent);
+                }
+                (Err(e), _) | (_, Err(e)) => eprintln!("gpu simplified-mesh benches skipped: {e}"),
             }
         }
         Err(e) => eprintln!("gpu tick bench skipped: {e}"),

@@ -193,6 +193,16 @@ pub struct TrackerConfig {
     /// [`crate::render::RenderAhead`]). The next tick takes that image only for an identical request, so poses do
     /// not depend on it. `false` keeps the CPU renderer on the tracker's thread alone.
     pub prefetch_renders: bool,
+    /// A mesh of more than this many triangles is rendered simplified ([`Self::render_mesh_tolerance_px`]): a
+    /// render costs per triangle, and CAD exports are often tessellated far finer than the ROI resolves. Meshes
+    /// up to it render as loaded (the library's have at most 4,736, and the suites' accuracy was measured with
+    /// them as loaded). 0 simplifies every mesh.
+    pub render_mesh_simplify_above: usize,
+    /// How far a simplified render mesh may lie from the loaded one: until a vertex or triangle centre of the
+    /// loaded mesh would lie farther than this from it, in ROI pixels at the object (one is `roi_scale`
+    /// diameters over `roi_size`; [`crate::mesh::simplify_for_render`]). 0 renders every mesh as loaded.
+    /// Accuracy is always scored, and the overlay drawn, with the mesh as loaded.
+    pub render_mesh_tolerance_px: f64,
     /// Oldest depth frame the tracker still uses, ms between its exposure and the tick after it arrived. A live
     /// depth camera delivers a frame tens of milliseconds after its exposure: the tracker then registers it at
     /// the object's estimate at the exposure, carries the object's part by the motion estimated since, and
@@ -260,6 +270,8 @@ impl Default for TrackerConfig {
             redetect: RedetectConfig::default(),
             object_threads: 0,
             prefetch_renders: true,
+            render_mesh_simplify_above: 5_000,
+            render_mesh_tolerance_px: 0.25,
             max_depth_age_ms: 200.0,
             retrack_late_depth: true,
             retrack_max_events: 4_000_000,

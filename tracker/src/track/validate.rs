@@ -61,6 +61,18 @@ impl TrackerConfig {
             "must be 0.5 to 4 diameters",
         )?;
         check(
+            "render_mesh_simplify_above",
+            self.render_mesh_simplify_above as f64,
+            |v| v <= 100_000_000.0,
+            "must be at most 100000000 triangles",
+        )?;
+        check(
+            "render_mesh_tolerance_px",
+            self.render_mesh_tolerance_px,
+            |v| (0.0..=2.0).contains(&v),
+            "must be 0 (the mesh as loaded) to 2 ROI pixels",
+        )?;
+        check(
             "iterations",
             f64::from(self.iterations),
             |v| v <= 100.0,
@@ -415,6 +427,30 @@ mod tests {
         assert_eq!(
             parse("retrack_max_events = 100000001").unwrap_err().key,
             "retrack_max_events"
+        );
+        for ok in [
+            "render_mesh_tolerance_px = 0.0",
+            "render_mesh_tolerance_px = 2.0",
+            "render_mesh_simplify_above = 0",
+        ] {
+            assert_eq!(parse(ok), Ok(()), "{ok}");
+        }
+        for bad in [
+            "render_mesh_tolerance_px = -0.1",
+            "render_mesh_tolerance_px = 2.5",
+            "render_mesh_tolerance_px = nan",
+        ] {
+            assert_eq!(
+                parse(bad).unwrap_err().key,
+                "render_mesh_tolerance_px",
+                "{bad}"
+            );
+        }
+        assert_eq!(
+            parse("render_mesh_simplify_above = 100000001")
+                .unwrap_err()
+                .key,
+            "render_mesh_simplify_above"
         );
         assert_eq!(parse("max_depth_age_ms = 0.0"), Ok(()));
         assert_eq!(parse("max_depth_age_ms = 500.0"), Ok(()));

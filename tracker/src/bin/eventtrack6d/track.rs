@@ -195,6 +195,16 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         eprintln!("warning: {warning}");
     }
     let mut tracker = EventTrack6d::new(config, rig, objects, renderer)?;
+    for (name, s) in names.iter().zip(tracker.render_meshes()) {
+        if s.triangles_after < s.triangles_before {
+            eprintln!(
+                "{name}: rendering {} of the mesh's {} triangles (every vertex within {:.3} mm)",
+                s.triangles_after,
+                s.triangles_before,
+                s.largest_error_m * 1e3
+            );
+        }
+    }
     let mut overlay = match &args.overlay {
         Some(dir) => Some(OverlayWriter::new(
             dir,

@@ -23,17 +23,20 @@ use retrack::{Deferred, Retrack};
 use threads::ObjectThreads;
 
 use crate::geometry::se3;
+use crate::mesh::{Simplification, simplify_for_render};
 use crate::recon::EventSurface;
 use crate::render::{RenderAhead, Renderer, Scene, SceneObject};
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
 use nalgebra::{Isometry3, Vector3};
+use std::sync::Arc;
 
 /// The EventTrack6D tracker (and, through [`super::TrackingMethod`], its baselines).
 pub struct EventTrack6d {
     config: TrackerConfig,
     names: Vec<String>,
+    render_meshes: Vec<Simplification>,
     rig: TrackingRig,
     renderer: Box<dyn Renderer + Send>,
     /// Forks of `renderer` for the threads that step objects beside the tracker's own ([`TrackerConfig::object_threads`]).
@@ -92,6 +95,7 @@ impl EventTrack6d {
         let mut tracks = Vec::with_capacity(objects.len());
         let mut scene = Vec::with_capacity(objects.len());
         let mut names = Vec::with_capacity(objects.len());
+        let mut render_meshes = Vec::with_capacity(objects.len());
         for (k, o) in objects.into_iter().enumerate() {
             let p = &o.first_pose;
             if !(p.translation.vector.iter().all(|v| v.is_finite())
@@ -108,13 +112,6 @@ impl EventTrack6d {
                     reason: "behind the camera (z <= 0)",
                 });
             }
-            let mesh_id =
-                renderer
-                    .add_mesh(o.mesh.clone())
-                    .map_err(|source| TrackError::Render {
-                        object: o.name.clone(),
-                        source,
-                    })?;
             let aabb = o.mesh.aabb();
             let label = (k + 1) as u16;
             let diameter = if o.diameter.is_finite() && o.diameter > 0.0 {
@@ -122,6 +119,21 @@ impl EventTrack6d {
             } else {
                 o.mesh.diameter()
             };
+            let roi_pixel_m = config.roi_scale * diameter / f64::from(config.roi_size);
+            let tolerance_m = if o.mesh.triangles().len() > config.render_mesh_simplify_above {
+                config.render_mesh_tolerance_px * roi_pixel_m
+            } else {
+                0.0
+            };
+            let (render_mesh, simplification) = simplify_for_render(&o.mesh, tolerance_m);
+            render_meshes.push(simplification);
+            let mesh_id =
+                renderer
+                    .add_mesh(Arc::new(render_mesh))
+                    .map_err(|source| TrackError::Render {
+                        object: o.name.clone(),
+                        source,
+                    })?;
             tracks.push(ObjectTrack::new(
                 label,
                 diameter,
@@ -181,6 +193,7 @@ impl EventTrack6d {
             },
             config,
             names,
+            render_meshes,
             rig,
             renderer,
             workers,
@@ -220,6 +233,12 @@ impl EventTrack6d {
                 })?;
         }
         Ok(())
+    }
+
+    /// How each object's render mesh was simplified from its CAD mesh, in object order
+    /// ([`TrackerConfig::render_mesh_simplify_above`]).
+    pub fn render_meshes(&self) -> &[Simplification] {
+        &self.render_meshes
     }
 
     /// Counters since creation.
