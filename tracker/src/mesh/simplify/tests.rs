@@ -105,6 +105,31 @@ fn checked_deviation(input: &Mesh, simple: &Mesh) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// [`checked_deviation`] over the input's triangles with area only (a degenerate triangle has no surface to keep,
+/// and its centre may lie anywhere along its line), and the vertices they use.
+fn checked_deviation_of_nondegenerate(input: &Mesh, simple: &Mesh) -> f64 {
+    let p = |i: u32| input.positions()[i as usize].cast::<f64>().coords;
+    input
+        .triangles()
+        .iter()
+        .filter(|t| {
+            (p(t[1]) - p(t[0]))
+                .cross(&(p(t[2]) - p(t[0])))
+                .norm_squared()
+                > 0.0
+        })
+        .flat_map(|t| {
+            [
+                p(t[0]),
+                p(t[1]),
+                p(t[2]),
+                (p(t[0]) + p(t[1]) + p(t[2])) / 3.0,
+            ]
+        })
+        .map(|q| distance_to_mesh(q, simple))
+        .fold(0.0, f64::max)
+}
+
 /// Every edge of the mesh (welded by position) is shared by exactly two triangles, in opposite directions.
 fn is_closed_and_consistently_wound(m: &Mesh) -> bool {
     let key = |i: u32| {
@@ -409,6 +434,29 @@ proptest! {
         prop_assert!(checked <= tolerance * (1.0 + 1e-9), "{} m at tolerance {} m", checked, tolerance);
         let d = deviation(&field, &simple, 300);
         prop_assert!(d <= 2.0 * tolerance, "deviation {} m at tolerance {} m", d, tolerance);
+    }
+
+    /// Any triangle soup (shared, repeated, non-manifold or degenerate triangles, as a broken export has) is
+    /// simplified without panicking into a valid mesh whose points stay within the tolerance.
+    #[test]
+    fn triangle_soups_stay_within_the_tolerance(
+        points in prop::collection::vec((-0.02f32..0.02, -0.02f32..0.02, -0.02f32..0.02), 4..24),
+        picks in prop::collection::vec((0usize..24, 0usize..24, 0usize..24), 1..60),
+        tolerance in 1e-4f64..5e-3,
+    ) {
+        let positions: Vec<Point3<f32>> = points.iter().map(|&(x, y, z)| Point3::new(x, y, z)).collect();
+        let n = positions.len();
+        let triangles: Vec<[u32; 3]> = picks
+            .iter()
+            .map(|&(a, b, c)| [(a % n) as u32, (b % n) as u32, (c % n) as u32])
+            .collect();
+        let Ok(soup) = Mesh::new("soup", MeshParts { positions, triangles, ..MeshParts::default() }) else {
+            return Ok(()); // Only zero-area soups are refused, and they never reach the tracker.
+        };
+        let (simple, report) = simplify_for_render(&soup, tolerance);
+        prop_assert!(report.triangles_after <= report.triangles_before);
+        let checked = checked_deviation_of_nondegenerate(&soup, &simple);
+        prop_assert!(checked <= tolerance * (1.0 + 1e-9), "{} m at tolerance {} m", checked, tolerance);
     }
 
     /// Spheres of any tessellation stay closed and consistently wound.
