@@ -198,7 +198,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     for (name, s) in names.iter().zip(tracker.render_meshes()) {
         if s.triangles_after < s.triangles_before {
             eprintln!(
-                "{name}: rendering {} of the mesh's {} triangles (every vertex within {:.3} mm)",
+                "{name}: rendering {} of the mesh's {} triangles (within {:.3} mm of it)",
                 s.triangles_after,
                 s.triangles_before,
                 s.largest_error_m * 1e3

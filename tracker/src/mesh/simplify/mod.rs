@@ -2,15 +2,16 @@
 //! 1997), with every vertex of the input kept within a tolerance of the result. A render costs per triangle
 //! drawn, and a CAD export is often tessellated far finer than the tracker's ROI resolves.
 //!
-//! Each input vertex and each input triangle's centre belongs to one triangle of the result. A collapse is made
+//! Each vertex and centre of an input triangle with area belongs to one triangle of the result. A collapse is made
 //! only if every such point of the triangles it changes lies within the tolerance of one of the triangles around
 //! the merged vertex; they then belong to the nearest of those. The points sample the input's surface, so this
 //! also holds the result's faces near it between them (a chord across a curved surface is checked at the points
 //! under it); the tests measure how far the surfaces part between the points.
 //!
-//! The result is geometry only: positions and triangles, face normals, one default material. Vertices are welded
-//! by position (to the micrometre) first, so seams where a CAD export duplicates vertices (texture or normal
-//! seams) do not open.
+//! The result is geometry only: positions, triangles, crease-angle normals where the input had normals, one
+//! default material. Vertices are welded first where their positions round to the same micrometre, so seams where
+//! a CAD export duplicates vertices (texture or normal seams) do not open; copies that round apart stay rims,
+//! held in place.
 //! Collapses keep the surface's topology (the link condition), never flip or flatten a triangle, and leave
 //! vertices on non-manifold edges where they are. Boundary edges are held by planes perpendicular to their
 //! triangle, so open meshes do not shrink at their rims by more than the tolerance either.
@@ -35,6 +36,18 @@ const WELD_PER_M: f64 = 1e6;
 /// this much (cosine): 40 degrees.
 const CREASE_COS: f64 = 0.766;
 
+/// A collapse may leave at most this many triangles around the merged vertex (about 60: it counts the two
+/// removed ones), which bounds the work of checking one and keeps hubs from growing.
+const MAX_FAN: usize = 64;
+
+/// Meshes reaching farther than this from their origin, metres, are returned unchanged: no tracked object is that
+/// large, and welding to the micrometre would overflow.
+const MAX_EXTENT_M: f64 = 1e6;
+
+/// Tolerances below this, metres, return the mesh unchanged: welding alone may move a vertex by up to a
+/// micrometre, which the reported error does not count.
+const MIN_TOLERANCE_M: f64 = 4e-6;
+
 /// A surviving triangle's normal may turn by at most this much (cosine) in one collapse: about 60 degrees.
 const MIN_NORMAL_COS: f64 = 0.5;
 
@@ -45,14 +58,15 @@ pub struct Simplification {
     pub triangles_before: usize,
     /// Triangles of the render mesh (equal to `triangles_before` when the input was returned unchanged).
     pub triangles_after: usize,
-    /// The largest distance from a vertex or triangle centre of the input to the render mesh, metres (at most the
-    /// tolerance).
+    /// An upper bound on the distance from a vertex or centre of an input triangle with area to the render mesh,
+    /// metres (each point's distance to the render triangle it was assigned to; at most the tolerance).
     pub largest_error_m: f64,
 }
 
-/// `mesh` simplified for geometry-only renders, with every vertex and triangle centre of `mesh` within
-/// `tolerance_m` (metres) of the result. Returns the input unchanged (normals, texture and all) when the tolerance
-/// is not positive or no collapse fits within it.
+/// `mesh` simplified for geometry-only renders, with every vertex and centre of its triangles with area within
+/// `tolerance_m` (metres) of the result (degenerate triangles render nothing and are dropped). Returns the input
+/// unchanged (normals, texture and all) when the tolerance is below 4 micrometres or NaN, the mesh reaches
+/// farther than 1,000 km, or no collapse fits within the tolerance.
 pub fn simplify_for_render(mesh: &Mesh, tolerance_m: f64) -> (Mesh, Simplification) {
     let before = mesh.triangles().len();
     let unchanged = || {
@@ -65,16 +79,17 @@ pub fn simplify_for_render(mesh: &Mesh, tolerance_m: f64) -> (Mesh, Simplificati
             },
         )
     };
-    if tolerance_m.is_nan() || tolerance_m <= 0.0 {
+    let aabb = mesh.aabb();
+    let extent = aabb.min.coords.amax().max(aabb.max.coords.amax());
+    if tolerance_m.is_nan() || tolerance_m < MIN_TOLERANCE_M || extent > MAX_EXTENT_M {
         return unchanged();
     }
     let mut collapser = Collapser::new(mesh.positions(), mesh.triangles(), tolerance_m);
-    collapser.run();
-    let largest_error_m = collapser.largest_distance();
-    let (positions, triangles) = collapser.into_parts();
-    if triangles.len() >= before {
+    if collapser.run() == 0 {
         return unchanged();
     }
+    let largest_error_m = collapser.largest_distance();
+    let (positions, triangles) = collapser.into_parts();
     // A mesh shaded smooth stays smooth; one shaded by its facets keeps its facets.
     let parts = if mesh.normals().is_some() {
         crease_normals(&positions, &triangles, CREASE_COS)
@@ -318,9 +333,10 @@ impl Collapser {
     }
 
     /// Collapses the cheapest valid edges until none is left or the cheapest's mean squared distance to its planes
-    /// already exceeds the tolerance (then its largest would too).
-    fn run(&mut self) {
+    /// already exceeds the tolerance (then its largest would too). Returns how many it made.
+    fn run(&mut self) -> usize {
         let max_cost = self.tolerance * self.tolerance;
+        let mut collapses = 0;
         while let Some(c) = self.queue.pop() {
             if c.cost > max_cost {
                 break;
@@ -334,10 +350,13 @@ impl Collapser {
                 continue;
             }
             self.collapse(c.a, c.b, c.target);
+            collapses += 1;
         }
+        collapses
     }
 
-    /// The largest distance from an input vertex to the triangle it belongs to, metres.
+    /// The largest distance from a checked input point to the triangle it belongs to, metres: at least its
+    /// distance to the whole result.
     fn largest_distance(&self) -> f64 {
         self.face_points
             .iter()
@@ -366,13 +385,19 @@ impl Collapser {
     /// Whether merging `b` into `a` at `target` keeps the surface a surface: the edge still exists between one or two
     /// triangles, the two ends share no neighbour but the edge's opposite corners (the link condition), an inner edge
     /// does not join two rims, triangles stay around the merged vertex (three inside the surface, one on a rim: a
-    /// closed tetrahedron does not fold into two coincident triangles), and no surviving triangle
+    /// closed tetrahedron of a manifold surface does not fold into two coincident triangles), no more than
+    /// [`MAX_FAN`] are involved, and no surviving triangle
     /// flips, turns too far or degenerates.
     /// Also checks that the input vertices of the changed triangles stay within the tolerance of the merged
     /// vertex's triangles, and notes where each goes in `moves`.
     fn may_collapse(&mut self, a: u32, b: u32, target: Vector3<f64>) -> bool {
         let around_a = &self.vertex_faces[a as usize];
         let around_b = &self.vertex_faces[b as usize];
+        // Checked first, in constant time: a hub (a fanned cap's centre, a sphere's pole) is met again after each
+        // collapse beside it, and checking its whole fan each time grew with the cube of its valence.
+        if around_a.len() + around_b.len() > MAX_FAN {
+            return false;
+        }
         let shared: Vec<u32> = around_a
             .iter()
             .copied()

@@ -43,7 +43,13 @@ pub(super) fn crease_normals(
                     .filter(|&&g| unit[g].dot(&unit[f]) >= crease_cos)
                     .map(|&g| face[g])
                     .sum();
-                let n = sum.try_normalize(0.0).unwrap_or(unit[f]).cast::<f32>();
+                // A triangle that rounded to nothing in f32 has no normal of its own: any unit vector keeps the
+                // mesh's normals valid, and it renders nothing.
+                let n = sum
+                    .try_normalize(0.0)
+                    .or_else(|| unit[f].try_normalize(0.0))
+                    .unwrap_or_else(Vector3::z)
+                    .cast::<f32>();
                 let key = (v, [n.x.to_bits(), n.y.to_bits(), n.z.to_bits()]);
                 *index.entry(key).or_insert_with(|| {
                     out_positions.push(positions[v as usize]);

@@ -186,7 +186,10 @@ fn a_sphere_loses_most_triangles_and_stays_a_closed_outward_surface_within_the_t
     assert!(v1 > 0.0 && (v1 - v0).abs() < 0.02 * v0, "{v0} {v1}");
     let checked = checked_deviation(&ball, &simple);
     assert!(checked <= tolerance * (1.0 + 1e-9), "{checked} m");
-    assert!((checked - report.largest_error_m).abs() < 1e-9);
+    assert!(
+        checked <= report.largest_error_m + 1e-9,
+        "{checked} {report:?}"
+    );
     // Between the checked points the surfaces may part by a little more (1.25 times here).
     let d = deviation(&ball, &simple, 1500);
     assert!(d < 1.5 * tolerance, "deviation {d} m");
@@ -279,7 +282,8 @@ fn no_tolerance_or_no_gain_returns_the_input_with_its_normals() {
         .map(|p| p.coords.normalize())
         .collect();
     let smooth = Mesh::new("smooth", parts).unwrap();
-    for tolerance in [0.0, -1.0, f64::NAN, 1e-9] {
+    // 1e-9: below what welding guarantees; 1e-5: above it, but nothing fits.
+    for tolerance in [0.0, -1.0, f64::NAN, 1e-9, 1e-5] {
         let (same, report) = simplify_for_render(&smooth, tolerance);
         assert_eq!(
             report.triangles_after, report.triangles_before,
@@ -385,6 +389,68 @@ fn a_smooth_mesh_stays_smooth_and_its_creases_stay_sharp() {
             "{n:?} at {p:?}: not its face's"
         );
     }
+}
+
+/// A closed cylinder (radius `r`, height `h`, metres) with `k` sides, its caps fanned from a centre vertex each.
+fn fanned_cylinder(r: f32, h: f32, k: u32) -> Mesh {
+    let mut positions = vec![Point3::new(0.0, 0.0, 0.0), Point3::new(0.0, 0.0, h)];
+    for z in [0.0, h] {
+        for i in 0..k {
+            let a = std::f32::consts::TAU * i as f32 / k as f32;
+            positions.push(Point3::new(r * a.cos(), r * a.sin(), z));
+        }
+    }
+    let (bottom, top) = (|i: u32| 2 + i % k, |i: u32| 2 + k + i % k);
+    let mut triangles = Vec::new();
+    for i in 0..k {
+        triangles.push([0, bottom(i + 1), bottom(i)]);
+        triangles.push([1, top(i), top(i + 1)]);
+        triangles.push([bottom(i), bottom(i + 1), top(i + 1)]);
+        triangles.push([bottom(i), top(i + 1), top(i)]);
+    }
+    mesh(positions, triangles)
+}
+
+#[test]
+fn fanned_caps_simplify_closed_within_the_tolerance() {
+    // Each cap's centre starts with 512 triangles around it: far beyond what one collapse may involve.
+    let can = fanned_cylinder(0.03, 0.05, 512);
+    assert!(is_closed_and_consistently_wound(&can));
+    let (simple, report) = simplify_for_render(&can, 2e-4);
+    assert!(
+        report.triangles_after * 4 < report.triangles_before,
+        "{report:?}"
+    );
+    assert!(is_closed_and_consistently_wound(&simple));
+    let checked = checked_deviation(&can, &simple);
+    assert!(checked <= 2e-4 * (1.0 + 1e-9), "{checked} m");
+}
+
+#[test]
+fn a_repeated_triangle_alone_is_no_reason_to_rebuild() {
+    // A tetrahedron with one face twice, texture coordinates and normals: nothing fits a 0.1 mm tolerance, so the
+    // mesh comes back as loaded, texture and normals included.
+    let mut parts = MeshParts {
+        positions: vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(0.03, 0.0, 0.0),
+            Point3::new(0.0, 0.03, 0.0),
+            Point3::new(0.0, 0.0, 0.03),
+        ],
+        triangles: vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2], [0, 3, 2]],
+        uvs: vec![[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [1.0, 1.0]],
+        ..MeshParts::default()
+    };
+    parts.normals = parts
+        .positions
+        .iter()
+        .map(|p| (p.coords - Vector3::repeat(0.01)).normalize())
+        .collect();
+    let tetra = Mesh::new("tetra", parts).unwrap();
+    let (same, report) = simplify_for_render(&tetra, 1e-4);
+    assert_eq!(report.triangles_after, 5);
+    assert_eq!(same.triangles(), tetra.triangles());
+    assert!(same.uvs().is_some() && same.normals().is_some());
 }
 
 #[test]
