@@ -23,6 +23,13 @@ use nalgebra::{Point3, Vector3};
 use std::path::PathBuf;
 use std::sync::Arc;
 
+/// The position `p` (metres) rounded to whole micrometres: vertices with equal keys are one point. Exporters and
+/// lathes often leave seams whose two copies differ in the last bits; the CPU renderer's closedness test and the
+/// render-mesh simplifier weld them by this key.
+pub(crate) fn weld_key(p: [f32; 3]) -> [i64; 3] {
+    p.map(|v| (f64::from(v) * 1e6).round() as i64)
+}
+
 /// A surface material: a diffuse (Lambertian) albedo, optionally modulated by a texture.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Material {

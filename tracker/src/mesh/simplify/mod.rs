@@ -20,17 +20,13 @@ mod distance;
 mod normals;
 mod quadric;
 
-use super::{Mesh, MeshParts};
+use super::{Mesh, MeshParts, weld_key};
 use distance::point_triangle_distance;
 use nalgebra::{Point3, Vector3};
 use normals::crease_normals;
 use quadric::Quadric;
 use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap, HashSet};
-
-/// Vertices weld when their positions round to the same micrometre (as the CPU renderer's closedness test): the
-/// two copies of a seam often differ in their last bits.
-const WELD_PER_M: f64 = 1e6;
 
 /// Where the input had vertex normals, the result's are averaged over neighbouring triangles that turn by at most
 /// this much (cosine): 40 degrees.
@@ -184,7 +180,7 @@ impl Collapser {
         let welded: Vec<u32> = positions
             .iter()
             .map(|p| {
-                let key = [p.x, p.y, p.z].map(|v| (f64::from(v) * WELD_PER_M).round() as i64);
+                let key = weld_key([p.x, p.y, p.z]);
                 *weld.entry(key).or_insert_with(|| {
                     position.push(p.cast::<f64>().coords);
                     (position.len() - 1) as u32

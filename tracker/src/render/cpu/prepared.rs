@@ -103,7 +103,7 @@ pub(in crate::render) fn back_face_cull_sign(positions: &[Vec3A], triangles: &[[
         .iter()
         .map(|p| {
             let next = weld.len() as u32;
-            let key = p.to_array().map(|v| (f64::from(v) * 1e6).round() as i64);
+            let key = crate::mesh::weld_key(p.to_array());
             *weld.entry(key).or_insert(next)
         })
         .collect();
