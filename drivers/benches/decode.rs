@@ -2,6 +2,10 @@
 //!
 //! Run: `cargo bench -p eventtrack6d-drivers --bench decode`. Throughput is reported in CD events per second.
 
+// `criterion_group!` defines undocumented public functions.
+#![allow(missing_docs)]
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use drivers::event::{CdEvent, EventBuffer, EventCounter, Geometry};
 use drivers::formats::any::{AnyDecoder, AnyEncoder, EventFormat};

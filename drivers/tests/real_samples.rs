@@ -1,5 +1,7 @@
 //! The real Prophesee recordings in `../shared/data/samples/` decode cleanly.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::event::{EventBuffer, EventCounter, Geometry};
 use drivers::formats::any::EventFormat;
 use drivers::raw::RawReader;

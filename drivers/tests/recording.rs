@@ -1,5 +1,7 @@
 //! Recording directories: write, reopen, and refuse inconsistent ones with a message naming the file.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::event::{CdEvent, EventBuffer, TriggerEdge};
 use drivers::recording::{
     CameraIntrinsics, CameraRig, ModelInfo, PoseSample, Recording, RecordingMeta, RecordingWriter,

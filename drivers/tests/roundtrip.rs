@@ -1,5 +1,7 @@
 //! Property tests: random events and triggers -> encode -> decode in random chunkings -> identical.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::event::{CdEvent, EventBuffer, TriggerEdge};
 use drivers::formats::any::{AnyDecoder, AnyEncoder, EventFormat};
 use drivers::formats::evt21::WordOrder;

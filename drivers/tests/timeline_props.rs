@@ -1,5 +1,7 @@
 //! Property tests of the trigger timeline under dropped, extra and jittered pulses.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::event::TriggerEdge;
 use drivers::timeline::{TickIter, TimelineConfig, ideal_edges};
 use proptest::prelude::*;

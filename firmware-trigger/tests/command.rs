@@ -1,6 +1,8 @@
 //! Host tests of the UART command interface: grammar, replies, refusal of garbage, bounded
 //! buffers.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use firmware_trigger::command::{
     Action, Command, CommandError, LINE_CAPACITY, LineBuffer, REPLY_CAPACITY, Reply, execute,
     parse, refuse, refuse_no_plan,

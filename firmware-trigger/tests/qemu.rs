@@ -6,6 +6,8 @@
 //! Needs `qemu-system-arm` 10 or newer and the rustup target `thumbv7em-none-eabihf`; without
 //! them it fails and says how to install them (`bash .ci/firmware.sh`).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};

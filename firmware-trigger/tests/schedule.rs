@@ -1,6 +1,8 @@
 //! Host tests of the schedule core: exact plans, refusals, widths, phase code, start/stop and
 //! counting, and no drift over an hour of pulses.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use firmware_trigger::edges::depth_index_of_event;
 use firmware_trigger::plan::Pulse;
 use firmware_trigger::{

@@ -1,7 +1,10 @@
 //! `hil-sim`: the hardware-in-the-loop simulator's command-line tool.
 
+mod reference;
+
 use anyhow::Context;
-use clap::{Parser, Subcommand};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use clap::{CommandFactory, Parser, Subcommand};
 use drivers::event::Geometry;
 use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
@@ -15,7 +18,7 @@ use std::process::ExitCode;
 
 /// Synthetic event + depth + ground-truth recordings for EventTrack6D, without hardware.
 #[derive(Debug, Parser)]
-#[command(name = "hil-sim", version, about, long_about = None, propagate_version = true)]
+#[command(name = "hil-sim", version, propagate_version = true)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -23,35 +26,42 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Generate one recording: a library object (or your OBJ, in metres) moving after one of the paper's
-    /// motion profiles in front of a static event camera (1280x720) and depth camera (848x480, 30 Hz), with
-    /// hand-like occluders, a textured wall and table, ESIM events, RealSense-like depth, the trigger train
-    /// and ground truth. Same seed, same bytes.
+    /// Generate one recording without hardware.
+    ///
+    /// A textured object from the procedural library (or your OBJ, in metres) moves after one of the paper's
+    /// motion profiles in front of a static EVK4-like event camera (1280x720, fx 1000 px) and a D435i-like depth
+    /// camera (848x480, 30 Hz, 6 cm to the side), with a textured wall and table and a hand-like occluder gripping
+    /// the object. The recording holds ESIM events with the rig's trigger train (events.raw), RealSense-like depth
+    /// frames, the cameras, ground truth at 1 kHz plus every tick, and the object meshes. The same seed gives
+    /// byte-identical recordings. A progress bar shows the simulated time. The format: docs/recording-format.md;
+    /// the simulation: docs/simulator.md.
     Generate {
         /// Library object name (cracker_box, pudding_box, can, bottle, mug, bowl, banana, hammer, spatula,
         /// drill, marker, wine_glass) or a path to an `.obj` file.
         #[arg(long)]
         object: String,
-        /// Motion profile: translation, rotation, shake, throw, hand-switch, depth.
-        #[arg(long, default_value = "shake")]
+        /// Motion profile: translation, rotation, shake, throw (ballistic flight with spin between two hands),
+        /// hand-switch, depth (towards and away from the camera).
+        #[arg(long, default_value = "shake", value_parser = motion_parser())]
         motion: MotionProfile,
-        /// Speed level: slow (~0.3 m/s), moderate (~1 m/s), fast (~2 m/s, up to 15 rad/s).
-        #[arg(long, default_value = "moderate")]
+        /// Speed level: slow (about 0.3 m/s, up to 2 rad/s), moderate (1 m/s, 6 rad/s), fast (2 m/s on average,
+        /// up to 15 rad/s).
+        #[arg(long, default_value = "moderate", value_parser = speed_parser())]
         speed: SpeedLevel,
         /// Length, seconds, in [0.01, 600].
-        #[arg(long, default_value_t = 3.0)]
+        #[arg(long, value_name = "S", default_value_t = 3.0)]
         seconds: f64,
-        /// Seed of everything random.
-        #[arg(long, default_value_t = 1)]
+        /// Seed of everything random; the same seed gives the same recording, byte for byte.
+        #[arg(long, value_name = "N", default_value_t = 1)]
         seed: u64,
         /// Output recording directory (created; files in it are overwritten).
-        #[arg(long)]
+        #[arg(long, value_name = "DIR")]
         out: PathBuf,
         /// Probability that a depth frame is dropped, in [0, 1].
-        #[arg(long, default_value_t = 0.0)]
+        #[arg(long, value_name = "P", default_value_t = 0.0)]
         drop_depth: f64,
         /// Background noise events per pixel per second, in [0, 100].
-        #[arg(long, default_value_t = 0.05)]
+        #[arg(long, value_name = "RATE", default_value_t = 0.05)]
         noise_hz: f64,
         /// Leave out the hand-like occluders.
         #[arg(long)]
@@ -59,64 +69,93 @@ enum Command {
         /// A further object in the scene, tracked too (repeatable): library name or `.obj` path, its motion
         /// and speed (default: those of `--object`) and where its trajectory is centred relative to the first
         /// object's, metres in the camera frame (default: 15 cm nearer the camera per further object, so it
-        /// passes in front of the others). E.g. `--with can:translation:slow:0.05,0,-0.15`.
+        /// passes in front of the others). Each has its own hand and its own seed; names must differ. E.g.
+        /// `--with can:translation:slow:0.05,0,-0.15`.
         #[arg(long = "with", value_name = "NAME[:MOTION[:SPEED[:X,Y,Z]]]")]
         with: Vec<String>,
     },
-    /// Generate (or reuse, when already there with the same parameters) a fixed named suite of recordings:
-    /// `dev` (every library object x three motion profiles at slow, moderate and fast speed, 3 s each),
-    /// `holdout` (the same shape, other seeds, each object under other motion-speed pairs), `smoke` (two short
-    /// sequences) or `multi` (12 scenes of two objects that hide each other, 2-3 s each).
-    /// Writes DIR/<sequence>/ and DIR/suite.json.
+    /// Generate a fixed, named suite of recordings, reusing those already generated with the same parameters.
+    ///
+    /// `dev`: every library object under three motion profiles, at slow, moderate and fast speed (36 sequences,
+    /// 3 s each). `holdout`: the same shape with other seeds and each object under other motion-speed pairs, to
+    /// check a change tuned on `dev`. `smoke`: two 1 s sequences. `multi`: 12 scenes of two objects that hide each
+    /// other, 2-3 s each. Writes DIR/<sequence>/ and DIR/suite.json. Each sequence has its own seed, so the
+    /// recordings do not depend on --jobs. Progress lines name each sequence as it finishes; after a failure no
+    /// further sequence is started and the first error is reported. Suite contents and generation times:
+    /// docs/simulator.md.
     Suite {
         /// Suite name: dev, holdout (dev's shape, other seeds and pairings), smoke or multi (two objects per scene).
-        #[arg(long, default_value = "dev")]
+        #[arg(long, default_value = "dev", value_parser = PossibleValuesParser::new(hil_sim::suite::SUITES))]
         name: String,
-        /// Output directory.
-        #[arg(long)]
+        /// Output directory: one recording directory per sequence, and suite.json.
+        #[arg(long, value_name = "DIR")]
         out: PathBuf,
         /// Sequences generated at once, 1 to 256 (default: one per available core); each renders on one thread and
         /// simulates the event sensor on another. The recordings do not depend on it; memory grows by about
         /// 160 MiB per job.
-        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=256))]
         jobs: Option<u32>,
     },
-    /// Write pictures of a recording at the given times: accumulated events (last 5 ms, red ON, blue OFF)
-    /// with the ground-truth contour in green, and the latest depth frame.
+    /// Write pictures of a recording at the given times.
+    ///
+    /// For each time T: events_<ms>.png, the events of the 5 ms before T (red ON, blue OFF, white background) with
+    /// the ground-truth object contour in green, and depth_<ms>.png, the latest depth frame (near = bright, no
+    /// measurement = purple). Prints the paths written.
     Preview {
         /// Recording directory.
         dir: PathBuf,
         /// Times, seconds from the start of the recording.
-        #[arg(long, num_args = 1.., required = true)]
+        #[arg(long, value_name = "T", num_args = 1.., required = true)]
         at: Vec<f64>,
         /// Output directory (default DIR/preview).
-        #[arg(long)]
+        #[arg(long, value_name = "OUT")]
         out: Option<PathBuf>,
     },
-    /// Write a rotating-bar test pattern as an EVT 3.0 `.raw` stream carrying the rig's 120 Hz trigger
-    /// pulses (every 4th one phase-coded for a 30 Hz depth exposure).
+    /// Write a rotating-bar test pattern as an EVT 3.0 `.raw` stream with the rig's trigger train.
+    ///
+    /// 1280x720; each pixel the bar sweeps fires one ON and one OFF event per revolution, plus background noise.
+    /// The trigger train is on channel 0: 120 Hz pulses of 100 us, every 4th one 200 us wide (a depth exposure),
+    /// as the trigger MCU emits them.
     Pattern {
-        /// Output `.raw` file (overwritten).
-        #[arg(long)]
+        /// Output `.raw` (or `.evt3`) file (overwritten; its folder is created).
+        #[arg(long, value_name = "FILE")]
         out: PathBuf,
         /// Length, seconds, in (0, 3600].
-        #[arg(long, default_value_t = 2.0)]
+        #[arg(long, value_name = "S", default_value_t = 2.0)]
         seconds: f64,
         /// Rotation rate, revolutions per second, in (0, 100].
-        #[arg(long, default_value_t = 1.0)]
+        #[arg(long, value_name = "R", default_value_t = 1.0)]
         revolutions_per_s: f64,
         /// Noise events per pixel per second, in [0, 1000].
-        #[arg(long, default_value_t = 0.1)]
+        #[arg(long, value_name = "RATE", default_value_t = 0.1)]
         noise_hz: f64,
         /// Seed of the noise.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, value_name = "N", default_value_t = 1)]
         seed: u64,
     },
+    /// Print the command reference (docs/commands-hil-sim.md) as Markdown, from these commands' own help texts.
+    #[command(hide = true)]
+    Reference,
+}
+
+/// `--motion`: the profiles' names, so that `--help` and the reference list them.
+fn motion_parser() -> impl TypedValueParser<Value = MotionProfile> {
+    PossibleValuesParser::new(MotionProfile::ALL.map(MotionProfile::name))
+        .try_map(|s| s.parse::<MotionProfile>())
+}
+
+/// `--speed`: the levels' names, so that `--help` and the reference list them.
+fn speed_parser() -> impl TypedValueParser<Value = SpeedLevel> {
+    PossibleValuesParser::new(SpeedLevel::ALL.map(SpeedLevel::name)).try_map(|s| s.parse::<SpeedLevel>())
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Reference => {
+            reference::run(Cli::command());
+            Ok(())
+        }
         Command::Suite { name, out, jobs } => run_suite(&name, &out, jobs),
         Command::Preview { dir, at, out } => {
             let out = out.unwrap_or_else(|| dir.join("preview"));

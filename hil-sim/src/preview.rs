@@ -5,11 +5,11 @@ use drivers::event::{CdEvent, EventSink, TriggerEdge};
 use drivers::recording::{Recording, RecordingError};
 use image::{Rgb, RgbImage};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use scene::geometry::PinholeCamera;
+use scene::mesh::{MeshLoadOptions, load_obj};
+use scene::render::{CpuRenderer, RenderTarget, Renderer, Scene, SceneObject};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use tracker::geometry::PinholeCamera;
-use tracker::mesh::{MeshLoadOptions, load_obj};
-use tracker::render::{CpuRenderer, RenderTarget, Renderer, Scene, SceneObject};
 
 /// Length of the event window shown before each time, microseconds.
 pub const EVENT_WINDOW_US: i64 = 5_000;
@@ -22,10 +22,10 @@ pub enum PreviewError {
     Recording(#[from] RecordingError),
     /// The object's mesh is unreadable.
     #[error(transparent)]
-    Mesh(#[from] tracker::mesh::MeshError),
+    Mesh(#[from] scene::mesh::MeshError),
     /// Rendering the contour failed.
     #[error(transparent)]
-    Render(#[from] tracker::render::RenderError),
+    Render(#[from] scene::render::RenderError),
     /// Writing a picture failed.
     #[error("{path}: {reason}")]
     Write {

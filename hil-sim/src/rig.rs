@@ -5,9 +5,9 @@ use crate::objects::texture::{Canvas, checker, fbm, mix, stripe, text_lines};
 use crate::objects::{MeshBuilder, UvRect};
 use drivers::recording::{CameraIntrinsics, CameraRig};
 use nalgebra::{Isometry3, Matrix4, Translation3, UnitQuaternion, Vector3};
+use scene::geometry::PinholeCamera;
+use scene::mesh::{Material, Mesh, MeshError, MeshParts, Texture};
 use std::sync::Arc;
-use tracker::geometry::PinholeCamera;
-use tracker::mesh::{Material, Mesh, MeshError, MeshParts, Texture};
 
 /// Cameras of the simulated rig.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,6 +1,8 @@
 //! Recordings from the generator: deterministic, consistent with the trigger schedule and the ESIM model,
 //! and readable by the project's decoder and an independent EVT3 reader.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::event::EventBuffer;
 use drivers::recording::Recording;
 use drivers::timeline::ideal_edges;
@@ -239,7 +241,7 @@ fn a_user_obj_with_material_and_texture_is_copied_into_the_recording() {
     for f in ["my_can.obj", "can.mtl", "can.png"] {
         assert!(out.path().join("models").join(f).is_file(), "{f} copied");
     }
-    let loaded = tracker::mesh::load_obj(&rec.mesh_path("my_can"), &Default::default()).unwrap();
+    let loaded = scene::mesh::load_obj(&rec.mesh_path("my_can"), &Default::default()).unwrap();
     assert!((loaded.mesh.diameter() - rec.models[0].diameter_m).abs() < 1e-9);
 }
 

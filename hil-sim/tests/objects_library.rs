@@ -1,15 +1,17 @@
 //! The procedural object library: realistic sizes, real symmetries, textures that produce contrast, determinism, and
 //! the OBJ + MTL + PNG round trip through the tracker's mesh loader.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use hil_sim::objects::{
     ObjectKind, ProceduralObject, generate, library, models_info_json, write_library, write_object,
 };
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use scene::geometry::{PinholeCamera, Roi};
+use scene::mesh::{Mesh, MeshLoadOptions, Symmetry, load_obj};
+use scene::render::{CpuRenderer, RenderTarget, Renderer, Scene, SceneObject};
 use std::collections::HashMap;
 use std::sync::Arc;
-use tracker::geometry::{PinholeCamera, Roi};
-use tracker::mesh::{Mesh, MeshLoadOptions, Symmetry, load_obj};
-use tracker::render::{CpuRenderer, RenderTarget, Renderer, Scene, SceneObject};
 
 /// Expected diameter (metres) of each kind, from its documented dimensions.
 fn expected_diameter(kind: ObjectKind) -> f64 {

@@ -3,6 +3,10 @@
 //! The real-time runtime does this for every event on the tracker thread, outside the timed tick of the `tick`
 //! bench; the input is the same generated mug shake (`tests/src/tick_fixture.rs`).
 
+// `criterion_group!` defines undocumented public functions.
+#![allow(missing_docs)]
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use drivers::event::EventBuffer;
 use eventtrack6d_tests::tick_fixture::mug_recording;

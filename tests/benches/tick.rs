@@ -6,13 +6,17 @@
 //! `paced/*_at_120hz` benches run the same ticks one tick period apart, as a live stream does. The `cpu_of_tick_*`
 //! benches report the CPU time of every thread of the process per back-to-back tick instead of wall time.
 
+// `criterion_group!` defines undocumented public functions.
+#![allow(missing_docs)]
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use eventtrack6d_tests::render_hook::HookedRenderer;
 use eventtrack6d_tests::tick_fixture::{SteadyTracker, mug_recording, steady_tracker};
+use scene::render::{CpuRenderer, RenderAhead, Renderer, RendererKind, create_renderer};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
-use tracker::render::{CpuRenderer, RenderAhead, Renderer, RendererKind, create_renderer};
 use tracker::track::{PoseTracker, TrackerConfig};
 
 /// Adds the wall time from its creation to its drop to `spent_ns`: held by [`HookedRenderer`] around one render.

@@ -1,4 +1,6 @@
 //! Shared helpers for the workspace-level end-to-end tests.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
 pub mod dbc;
 /// A renderer that runs a hook before every render (counting renders, noting threads).
 pub mod render_hook;

@@ -1,12 +1,12 @@
 //! A renderer wrapper that runs a hook around every render, for tests and benches that watch how a tracker
 //! renders.
 
-use std::sync::Arc;
-use tracker::geometry::{PinholeCamera, Roi};
-use tracker::mesh::Mesh;
-use tracker::render::{
+use scene::geometry::{PinholeCamera, Roi};
+use scene::mesh::Mesh;
+use scene::render::{
     MeshId, PrefetchCounts, RenderDevice, RenderError, RenderTarget, Renderer, Scene,
 };
+use std::sync::Arc;
 
 /// Renders with `inner`, calling the hook first on every render (ROI renders included; prefetches, which render
 /// nothing the caller sees yet, are passed on without it) and holding what it returns until that render is done, so a guard's `Drop` runs right after it; forks share the hook.

@@ -8,13 +8,11 @@ use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use nalgebra::Translation3;
+use scene::render::Renderer;
 use std::path::Path;
-use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::render::Renderer;
-use tracker::track::{
-    EventTrack6d, PoseTracker, TrackerConfig, TrackerCounters, recording_object, recording_rig,
-    track_recording,
-};
+use tracker::recording::{PoseTrack, recording_ticks};
+use tracker::recording::{recording_object, recording_rig};
+use tracker::track::{EventTrack6d, PoseTracker, TrackerConfig, TrackerCounters, track_recording};
 
 /// A warmed-up tracker and what to feed it for one more tick.
 pub struct SteadyTracker {

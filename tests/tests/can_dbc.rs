@@ -1,13 +1,15 @@
 //! The shipped DBC (`config/can/eventtrack6d.dbc`) read by an independent parser (`can-dbc`) decodes the tracker's
 //! CAN frames (written through the candump sink) to the published poses within the DBC's resolution.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::timeline::Tick;
+use eventtrack6d::publish::can::{CandumpClock, CandumpSink, PoseEncoder};
+use eventtrack6d::publish::{PoseSink, TickPoses};
 use eventtrack6d_tests::dbc::{DbcDecoder, DbcPose, DbcPoseReader, parse_candump_line};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use std::path::Path;
 use std::time::Instant;
-use tracker::publish::can::{CandumpClock, CandumpSink, PoseEncoder};
-use tracker::publish::{PoseSink, TickPoses};
 use tracker::track::{PoseEstimate, TrackingState};
 
 fn dbc() -> DbcDecoder {
@@ -201,7 +203,7 @@ fn candump_log_matches_pose_csv_through_the_dbc() {
         let names: Vec<String> = (0..objects).map(|i| format!("obj{i}")).collect();
         let mut can =
             CandumpSink::create(&log, "can0", PoseEncoder { base_id: 0x300, fd }).unwrap();
-        let mut csv_sink = tracker::publish::csv::CsvPoseSink::create(&csv).unwrap();
+        let mut csv_sink = eventtrack6d::publish::csv::CsvPoseSink::create(&csv).unwrap();
         let data = poses(40, objects);
         for (tick, ests) in &data {
             let tp = TickPoses {

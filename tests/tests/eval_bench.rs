@@ -1,18 +1,19 @@
 //! End to end: a short simulated recording, the benchmark's methods run over it with only the first pose given,
 //! and the evaluation moving the right way as the oracle's noise grows.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::recording::Recording;
-use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
-use hil_sim::motion::{MotionProfile, SpeedLevel};
-use hil_sim::objects::ObjectKind;
-use tracker::eval::bench::{
+use eval::bench::{
     MethodResults, SuiteSequence, expand_seeds, method_from_spec, open_sequence, results_json,
     results_markdown, run_sequence,
 };
-use tracker::eval::quality_report::method_quality_report;
-use tracker::eval::{
-    AucLimit, PoseTrack, evaluate_object, format_pose_csv, parse_pose_csv, recording_ticks,
-};
+use eval::quality_report::method_quality_report;
+use eval::{AucLimit, evaluate_object};
+use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
+use hil_sim::motion::{MotionProfile, SpeedLevel};
+use hil_sim::objects::ObjectKind;
+use tracker::recording::{PoseTrack, format_pose_csv, parse_pose_csv, recording_ticks};
 
 fn run(spec: &str, seq: &SuiteSequence) -> MethodResults {
     let (rec, ticks) = open_sequence(seq).unwrap();
@@ -176,7 +177,7 @@ fn bench_methods_on_a_short_recording() {
         .iter()
         .filter_map(|t| {
             gt.interpolated_at(t.t_us)
-                .map(|pose| tracker::eval::PoseRecord {
+                .map(|pose| tracker::recording::PoseRecord {
                     t_us: t.t_us,
                     object: "can".into(),
                     pose,

@@ -6,6 +6,8 @@
 //! A depth frame that arrives late is checked at its exposure, where it shows the object: an estimate knocked off
 //! the object there is replaced by a candidate near the truth.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::event::CdEvent;
 use drivers::recording::{DepthFrame, Recording};
 use drivers::timeline::Tick;
@@ -13,12 +15,12 @@ use eventtrack6d_tests::tick_fixture::mug_recording;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
-use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::render::CpuRenderer;
+use scene::render::CpuRenderer;
+use tracker::recording::{PoseTrack, recording_ticks};
+use tracker::recording::{recording_object, recording_rig};
 use tracker::track::{
     DepthFallbackCheck, EventTrack6d, FallbackRule, OfflineTiming, PoseEstimate, PoseTracker,
-    TrackerConfig, TrackerCounters, recording_object, recording_rig, track_recording,
-    track_recording_timed,
+    TrackerConfig, TrackerCounters, track_recording, track_recording_timed,
 };
 
 /// A marker held in a hand, translating at moderate speed for 1 s (seed 1031, the dev suite's marker

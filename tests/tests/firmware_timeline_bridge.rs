@@ -6,6 +6,8 @@
 //! the ticks must land on the 120 Hz rising edges and the depth-exposure ticks on the 30 Hz
 //! pulses that trigger the depth camera, with phases 0, 1/4, 1/2, 3/4 between exposures.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::event::{CdEvent, EventBuffer, Geometry, TriggerEdge};
 use drivers::formats::evt3::{Evt3Decoder, Evt3Encoder};
 use drivers::timeline::{Tick, TimelineConfig, TriggerTimeline};

@@ -2,13 +2,14 @@
 //! through `intensity.always`); at the defaults it keeps the latest event times alone. The poses do not depend on
 //! whether `I_t` is kept.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::recording::Recording;
 use eventtrack6d_tests::tick_fixture::mug_recording;
-use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::render::CpuRenderer;
-use tracker::track::{
-    EventTrack6d, PoseEstimate, TrackerConfig, recording_object, recording_rig, track_recording,
-};
+use scene::render::CpuRenderer;
+use tracker::recording::{PoseTrack, recording_ticks};
+use tracker::recording::{recording_object, recording_rig};
+use tracker::track::{EventTrack6d, PoseEstimate, TrackerConfig, track_recording};
 
 /// Every estimate of a replay with `config`, and whether the tracker's surface kept `I_t`.
 fn run(recording: &Recording, config: TrackerConfig) -> (Vec<PoseEstimate>, bool) {

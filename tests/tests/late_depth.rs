@@ -3,18 +3,21 @@
 //! estimate at its exposure and carries it to the tick it arrives at. Before, a frame more than half a tick late
 //! was dropped, so any realistic latency left the tracker on events alone.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::event::CdEvent;
 use drivers::recording::{DepthFrame, Recording};
 use drivers::timeline::Tick;
 use eventtrack6d_tests::tick_fixture::mug_recording;
 use nalgebra::Isometry3;
+use scene::geometry::se3;
+use scene::render::CpuRenderer;
 use std::path::Path;
-use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::geometry::se3;
-use tracker::render::CpuRenderer;
+use tracker::recording::{PoseTrack, recording_ticks};
+use tracker::recording::{recording_object, recording_rig};
 use tracker::track::{
     EventTrack6d, OfflineStats, OfflineTiming, PoseEstimate, PoseTracker, TrackerConfig,
-    TrackerCounters, recording_object, recording_rig, track_recording_timed,
+    TrackerCounters, track_recording_timed,
 };
 
 /// The moderate mug shake every test here tracks (1 s, generated once per test binary run into a temp dir).

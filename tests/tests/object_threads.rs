@@ -1,19 +1,20 @@
 //! Several objects stepped on several threads: each thread renders with its own fork of the renderer, and the
 //! poses, qualities and states are bit for bit those of the single-threaded tracker.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::recording::Recording;
 use eventtrack6d_tests::render_hook::HookedRenderer;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use nalgebra::Translation3;
+use scene::render::CpuRenderer;
 use std::collections::HashSet;
 use std::sync::{Arc, Mutex};
-use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::render::CpuRenderer;
-use tracker::track::{
-    EventTrack6d, PoseEstimate, TrackerConfig, recording_object, recording_rig, track_recording,
-};
+use tracker::recording::{PoseTrack, recording_ticks};
+use tracker::recording::{recording_object, recording_rig};
+use tracker::track::{EventTrack6d, PoseEstimate, TrackerConfig, track_recording};
 
 /// Every estimate of every tick, and the most threads that rendered within one tick.
 fn run(recording: &Recording, threads: usize) -> (Vec<PoseEstimate>, usize) {

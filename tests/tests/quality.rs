@@ -4,15 +4,16 @@
 //! visible fraction was forgotten (which made the state flicker `degraded` at every depth frame and `tracking`
 //! at the three ticks after it).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::recording::Recording;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
-use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::render::CpuRenderer;
-use tracker::track::{
-    EventTrack6d, TrackerConfig, recording_object, recording_rig, track_recording,
-};
+use scene::render::CpuRenderer;
+use tracker::recording::{PoseTrack, recording_ticks};
+use tracker::recording::{recording_object, recording_rig};
+use tracker::track::{EventTrack6d, TrackerConfig, track_recording};
 
 #[test]
 fn without_events_quality_changes_only_at_depth_frames() {

@@ -3,19 +3,21 @@
 //! where it stands; with re-detection off it stays off until the object happens to move into its ROI. With the
 //! frames late, as a live depth camera delivers them, the search is made at each frame's exposure.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::recording::Recording;
 use eventtrack6d_tests::render_hook::HookedRenderer;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use nalgebra::{Isometry3, Translation3};
+use scene::render::CpuRenderer;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::render::CpuRenderer;
+use tracker::recording::{PoseTrack, recording_ticks};
+use tracker::recording::{recording_object, recording_rig};
 use tracker::track::{
-    EventTrack6d, OfflineTiming, PoseTracker, TrackerConfig, TrackingState, recording_object,
-    recording_rig, track_recording_timed,
+    EventTrack6d, OfflineTiming, PoseTracker, TrackerConfig, TrackingState, track_recording_timed,
 };
 
 /// What a run did: translation error (metres) and state at every tick, re-detections, and the most renders

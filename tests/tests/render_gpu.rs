@@ -5,16 +5,18 @@
 //! Needs a Vulkan adapter: on a machine without a GPU, Mesa's lavapipe (`apt-get install mesa-vulkan-drivers`, which
 //! `.ci/setup` does). Without one these tests fail; they never pass silently.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use hil_sim::objects::{ObjectKind, generate, library};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
-use std::sync::Arc;
-use tracker::geometry::{PinholeCamera, Roi};
-use tracker::mesh::{Material, Mesh, MeshParts, Texture};
-use tracker::render::{
+use scene::geometry::{PinholeCamera, Roi};
+use scene::mesh::{Material, Mesh, MeshParts, Texture};
+use scene::render::{
     BackgroundMesh, CpuRenderer, GpuRenderer, MASK_BACKGROUND, MASK_EMPTY, MeshId, PrefetchCounts,
     RenderDevice, RenderError, RenderTarget, Renderer, RendererKind, Scene, SceneObject,
     create_renderer,
 };
+use std::sync::Arc;
 
 fn gpu_renderer() -> GpuRenderer {
     GpuRenderer::new().unwrap_or_else(|e| {

@@ -2,13 +2,14 @@
 //! `render_mesh_tolerance_px`, and the tracker still follows it; meshes up to the threshold, or any mesh with a
 //! zero tolerance, render as loaded.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use eventtrack6d_tests::tick_fixture::mug_recording;
-use tracker::eval::{PoseTrack, recording_ticks};
-use tracker::mesh::Simplification;
-use tracker::render::CpuRenderer;
-use tracker::track::{
-    EventTrack6d, TrackerConfig, recording_object, recording_rig, track_recording,
-};
+use scene::mesh::Simplification;
+use scene::render::CpuRenderer;
+use tracker::recording::{PoseTrack, recording_ticks};
+use tracker::recording::{recording_object, recording_rig};
+use tracker::track::{EventTrack6d, TrackerConfig, track_recording};
 
 /// Tracks the fixture's 0.5 s mug shake with `config`: how the mesh was simplified, the mug's diameter, and the
 /// mean and largest distance between the estimated and true positions, metres.

@@ -4,11 +4,13 @@
 //! two-object scene scored 47 / 8 ADD-S where the benchmark scored 22 / 23. Both hand the tracker each depth frame
 //! by moving it, not copying it.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use eventtrack6d::runtime::setup::recording_scene;
+use eventtrack6d::runtime::{self, Config, Hooks, build_tracker};
 use eventtrack6d_tests::tick_fixture::{mug_and_can_recording, mug_recording, steady_tracker};
-use tracker::eval::{PoseRow, parse_pose_csv};
-use tracker::render::{CpuRenderer, RendererKind};
-use tracker::runtime::setup::recording_scene;
-use tracker::runtime::{self, Config, Hooks, build_tracker};
+use scene::render::{CpuRenderer, RendererKind};
+use tracker::recording::{PoseRow, parse_pose_csv};
 use tracker::track::{
     OfflineTiming, PoseTracker, TrackerConfig, TrackerCounters, track_recording_timed,
 };

@@ -1,11 +1,15 @@
 //! End to end through the real-time runtime: a short simulated recording is replayed in real time through
-//! `tracker::runtime::run` (trigger timeline -> tracker thread -> CSV, zenoh and candump sinks) while a separate zenoh
+//! `eventtrack6d::runtime::run` (trigger timeline -> tracker thread -> CSV, zenoh and candump sinks) while a separate zenoh
 //! session (peer, loopback, multicast scouting off, explicitly connected to the runtime's listen port picked free at
 //! run time) subscribes to the rmw_zenoh PoseStamped key. Every sample must carry rmw_zenoh's 33-byte attachment,
 //! decode as CDR and equal the CSV sink's pose to 1e-9, at 120 Hz; the candump log, decoded through the shipped DBC
 //! file by the independent DBC reader, must give the same poses within the fixed-point resolution.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::recording::Recording;
+use eventtrack6d::publish::ros2::{self, Attachment, decode_pose_stamped};
+use eventtrack6d::runtime::{self, Config, Hooks, StopFlag};
 use eventtrack6d_tests::dbc::{
     DbcDecoder, DbcPoseReader, check_candump_against_csv, parse_candump_line,
 };
@@ -16,9 +20,7 @@ use std::collections::HashMap;
 use std::net::TcpListener;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
-use tracker::eval::{PoseRecord, parse_pose_csv, recording_ticks};
-use tracker::publish::ros2::{self, Attachment, decode_pose_stamped};
-use tracker::runtime::{self, Config, Hooks, StopFlag};
+use tracker::recording::{PoseRecord, parse_pose_csv, recording_ticks};
 use zenoh::Wait;
 
 fn free_port() -> u16 {
@@ -200,7 +202,10 @@ candump_log = "poses.candump.log"
     assert_eq!(log_path, out_dir.join("latency.csv"));
     let log = std::fs::read_to_string(&log_path).unwrap();
     let mut lines = log.lines();
-    assert_eq!(lines.next(), Some(tracker::runtime::LATENCY_LOG_HEADER));
+    assert_eq!(
+        lines.next(),
+        Some(eventtrack6d::runtime::LATENCY_LOG_HEADER)
+    );
     let log_rows: Vec<Vec<f64>> = lines
         .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
         .collect();

@@ -3,11 +3,13 @@
 //! too), over event, depth and plain ticks, each followed by `prepare_next_tick` as in the runtime, for one
 //! object and for two objects on two threads.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use drivers::recording::Recording;
 use eventtrack6d_tests::tick_fixture::{mug_recording, steady_tracker_of};
+use scene::render::CpuRenderer;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use tracker::render::CpuRenderer;
 use tracker::track::{PoseTracker, TrackerConfig, TrackerCounters, TrackingMethod};
 
 struct Counting;

@@ -3,8 +3,10 @@
 //!
 //! Needs a Vulkan adapter (lavapipe on CI, as `render_gpu.rs`); without one it fails, naming the package.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 use eventtrack6d_tests::tick_fixture::{EstimateBits, mug_recording, replay_bits};
-use tracker::render::{RendererKind, create_renderer};
+use scene::render::{RendererKind, create_renderer};
 use tracker::track::{TrackerConfig, TrackerCounters};
 
 fn replay(prefetch: bool) -> (Vec<EstimateBits>, TrackerCounters) {

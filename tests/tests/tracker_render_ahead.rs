@@ -3,12 +3,14 @@
 //! quality changes; without it the tracker renders on its own thread only. With several object threads, each
 //! renders its own objects ahead.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use eventtrack6d::runtime::build_tracker;
+use eventtrack6d::runtime::setup::recording_scene;
 use eventtrack6d_tests::tick_fixture::{
     EstimateBits, mug_and_can_recording, mug_recording, replay_bits,
 };
-use tracker::render::{CpuRenderer, RendererKind};
-use tracker::runtime::build_tracker;
-use tracker::runtime::setup::recording_scene;
+use scene::render::{CpuRenderer, RendererKind};
 use tracker::track::{TrackerConfig, TrackerCounters, TrackingMethod, track_recording};
 
 fn replay(config: TrackerConfig) -> (Vec<EstimateBits>, TrackerCounters) {

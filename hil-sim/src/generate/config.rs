@@ -5,8 +5,8 @@ use crate::esim::{EsimConfig, EsimStats};
 use crate::motion::{MotionProfile, SpeedLevel};
 use crate::objects::ObjectKind;
 use drivers::recording::RecordingError;
+use scene::render::RenderError;
 use std::path::PathBuf;
-use tracker::render::RenderError;
 
 /// Which object to put in the scene.
 #[derive(Debug, Clone, PartialEq)]
@@ -169,7 +169,7 @@ pub enum GenerateError {
     Parameter(String),
     /// The object or a prop could not be built or loaded.
     #[error(transparent)]
-    Mesh(#[from] tracker::mesh::MeshError),
+    Mesh(#[from] scene::mesh::MeshError),
     /// Writing the recording failed.
     #[error(transparent)]
     Recording(#[from] RecordingError),

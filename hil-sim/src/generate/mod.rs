@@ -11,8 +11,8 @@ use drivers::event::TriggerEdge;
 use drivers::recording::{RecordingMeta, RecordingWriter, TriggerSchedule};
 use drivers::timeline::ideal_edges;
 use nalgebra::Isometry3;
+use scene::render::{BackgroundMesh, Lighting, RenderTarget, Renderer, Scene};
 use std::path::Path;
-use tracker::render::{BackgroundMesh, Lighting, RenderTarget, Renderer, Scene};
 
 mod config;
 mod metadata;

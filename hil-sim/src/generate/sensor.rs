@@ -11,11 +11,11 @@ use crate::esim::EventSimulator;
 use crate::rng::SeedRng;
 use drivers::event::{CdEvent, TriggerEdge};
 use drivers::recording::RecordingWriter;
-use std::sync::mpsc::{Receiver, Sender};
-use tracker::geometry::PinholeCamera;
-use tracker::render::{
+use scene::geometry::PinholeCamera;
+use scene::render::{
     BackgroundMesh, Lighting, MASK_EMPTY, RenderTarget, Renderer, Scene, SceneObject,
 };
+use std::sync::mpsc::{Receiver, Sender};
 
 /// The part of the event camera's image that can change in one step, and the region rendered for it.
 #[derive(Debug, Clone, Copy)]

@@ -7,15 +7,15 @@ use crate::objects;
 use crate::rig::{Prop, grip, hand_mesh, surroundings};
 use drivers::recording::{ContinuousSymmetry, ModelInfo};
 use nalgebra::{Isometry3, Point3, Vector3};
+use scene::geometry::{PinholeCamera, Roi};
+use scene::mesh::{Mesh, MeshLoadOptions, Symmetry, load_obj};
 use std::path::Path;
 use std::sync::Arc;
-use tracker::geometry::{PinholeCamera, Roi};
-use tracker::mesh::{Mesh, MeshLoadOptions, Symmetry, load_obj};
 
 /// Largest user mesh the simulated scene takes, metres across: the object moves about 0.6 m in front of the
 /// camera, where a 1 m object already fills the view.
 pub const MAX_OBJECT_DIAMETER_M: f64 = 1.0;
-use tracker::render::{
+use scene::render::{
     BackgroundMesh, CpuRenderer, Lighting, MeshId, RenderError, RenderTarget, Renderer, Scene,
     SceneObject,
 };

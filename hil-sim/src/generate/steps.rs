@@ -7,8 +7,8 @@ use super::GenerateError;
 use super::sensor::{ChangingRegion, DepthExposure, Step};
 use super::stage::Stage;
 use nalgebra::Isometry3;
-use tracker::geometry::{PinholeCamera, Roi};
-use tracker::render::RenderError;
+use scene::geometry::{PinholeCamera, Roi};
+use scene::render::RenderError;
 
 /// What the steps need that does not change during generation.
 pub(super) struct StepPlan<'a> {

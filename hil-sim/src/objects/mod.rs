@@ -5,7 +5,7 @@
 //! Each object is a single-material triangle mesh with one texture atlas; textures are busy (labels, stripes, noise)
 //! so that moving surfaces produce events. Objects are centred on their bounding box; the symmetry axis of round
 //! objects is the object z axis. [`write_object`] stores an object as OBJ + MTL + PNG that
-//! [`tracker::mesh::load_obj`] reads back.
+//! [`scene::mesh::load_obj`] reads back.
 
 mod builder;
 mod packaging;
@@ -21,8 +21,8 @@ pub use write::{ObjectFiles, ObjectWriteError, models_info_json, write_library, 
 
 use image::RgbImage;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use scene::mesh::{Material, Mesh, MeshError, MeshParts, ObjectInfo, Symmetry, Texture};
 use std::sync::Arc;
-use tracker::mesh::{Material, Mesh, MeshError, MeshParts, ObjectInfo, Symmetry, Texture};
 
 /// Side of every object's texture atlas, texels.
 pub const TEXTURE_SIZE: u32 = 512;

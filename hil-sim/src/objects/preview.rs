@@ -3,10 +3,10 @@
 use super::ProceduralObject;
 use image::GrayImage;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
+use scene::geometry::{PinholeCamera, Roi};
+use scene::mesh::MeshError;
+use scene::render::{CpuRenderer, RenderError, RenderTarget, Renderer, Scene, SceneObject};
 use std::sync::Arc;
-use tracker::geometry::{PinholeCamera, Roi};
-use tracker::mesh::MeshError;
-use tracker::render::{CpuRenderer, RenderError, RenderTarget, Renderer, Scene, SceneObject};
 
 /// Why a preview could not be rendered.
 #[derive(Debug, thiserror::Error)]

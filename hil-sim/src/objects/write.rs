@@ -1,10 +1,10 @@
 //! Writing objects as Wavefront OBJ + MTL + PNG texture, and the BOP-style `models_info` for a set of objects.
 
 use super::{ProceduralObject, library};
+use scene::mesh::{MeshError, ObjectInfo};
 use serde_json::{Map, Value};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use tracker::mesh::{MeshError, ObjectInfo};
 
 /// Why an object could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -40,7 +40,7 @@ pub enum ObjectWriteError {
 /// The files written for one object.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ObjectFiles {
-    /// The OBJ file (`<name>.obj`); load it with [`tracker::mesh::load_obj`].
+    /// The OBJ file (`<name>.obj`); load it with [`scene::mesh::load_obj`].
     pub obj: PathBuf,
     /// The material file (`<name>.mtl`).
     pub mtl: PathBuf,

@@ -3,7 +3,7 @@
 //! input, and whatever decodes re-encodes to bytes that decode to the same message (bit for bit, NaNs included).
 
 #[allow(dead_code, unused_imports)]
-#[path = "../../src/publish/ros2/mod.rs"]
+#[path = "../../app/src/publish/ros2/mod.rs"]
 mod ros2;
 
 use libfuzzer_sys::fuzz_target;

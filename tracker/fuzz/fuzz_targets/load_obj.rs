@@ -4,7 +4,7 @@
 //! within its vertex list.
 
 #[allow(dead_code, unused_imports)]
-#[path = "../../src/mesh/mod.rs"]
+#[path = "../../scene/src/mesh/mod.rs"]
 mod mesh;
 
 use libfuzzer_sys::fuzz_target;

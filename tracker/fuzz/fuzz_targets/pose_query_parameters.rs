@@ -1,7 +1,7 @@
 #![no_main]
 //! Fuzz the pose query's parameter parser: no panic on any input, and a time it accepts is what the parameters say.
 
-#[path = "../../src/publish/zenoh/query_parameters.rs"]
+#[path = "../../app/src/publish/zenoh/query_parameters.rs"]
 mod query_parameters;
 
 use libfuzzer_sys::fuzz_target;

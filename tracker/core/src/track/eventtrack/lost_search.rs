@@ -1,0 +1,296 @@
+//! The search for objects the tracker fell off: planned at a depth frame from the object-sized foreground
+//! clusters of the depth image (see [`crate::track::redetect`]), then carried out a few places per tick, each
+//! place tried with a depth-only refinement against that frame.
+
+use super::EventTrack6d;
+use super::place_check::{PlaceCheck, PlaceResult, ProbeSet};
+use crate::track::TrackingState;
+use crate::track::config::{DepthUse, TrackerConfig};
+use crate::track::object::{ObjectTrack, TickInputs};
+use crate::track::redetect::{Cluster, DepthBackground, cluster_centres};
+use drivers::recording::DepthFrame;
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use scene::geometry::PinholeCamera;
+use scene::render::SceneObject;
+use std::collections::VecDeque;
+
+/// One place to check for one object.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PendingPlace {
+    pub(super) object: usize,
+    /// Start of the depth-only refinement, `T_cam_obj`.
+    pub(super) start: Isometry3<f64>,
+    /// Whether this is where the tracker estimated the object at the frame's exposure (the score to beat).
+    pub(super) estimated: bool,
+}
+
+/// One object's search in progress.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Search {
+    /// Score at the prediction.
+    here: f64,
+    /// Best other place so far: score and refined pose.
+    best: Option<(f64, Isometry3<f64>)>,
+    /// Places still pending.
+    remaining: usize,
+}
+
+/// Re-detection state shared by all objects: the learned background and reused buffers.
+pub(super) struct Redetection {
+    pub(super) background: DepthBackground,
+    /// The depth frame the tracker holds was used at a tick but is not folded into `background` yet: folding it
+    /// waits until the background is read, the tick's poses are out, or the frame is replaced, whichever is first.
+    pub(super) background_behind: bool,
+    pub(super) foreground: Vec<Point3<f64>>,
+    pub(super) seeds: Vec<(usize, Point3<f64>)>,
+    pub(super) centres: Vec<Cluster>,
+    /// Places still to check, in order, against the depth frame `frame` (index, exposure time in microseconds).
+    pub(super) pending: VecDeque<PendingPlace>,
+    pub(super) frame: Option<(u64, i64)>,
+    /// Every object where it was estimated at `frame`'s exposure (predicted, for a frame on time): the places
+    /// are checked with the others there.
+    pub(super) scene: Vec<SceneObject>,
+    /// Per object: the search's results so far.
+    pub(super) searches: Vec<Search>,
+    /// The places being checked at this tick and their results.
+    pub(super) checks: Vec<PendingPlace>,
+    pub(super) results: Vec<PlaceResult>,
+    /// Scratch tracks for the checks, one set per renderer (thread).
+    pub(super) probes: Vec<ProbeSet>,
+}
+
+impl Redetection {
+    /// Empty re-detection state for the objects of `scene` seen by the depth camera `depth_cam`, with `probes`
+    /// (one set per renderer) to check places in.
+    pub(super) fn new(
+        config: &TrackerConfig,
+        scene: &[SceneObject],
+        depth_cam: &PinholeCamera,
+        probes: Vec<ProbeSet>,
+    ) -> Self {
+        let objects = scene.len();
+        let places = objects * (1 + 2 * config.redetect.candidates);
+        let cell = config.redetect.cell_px.max(1);
+        Self {
+            background: DepthBackground::new(cell, depth_cam.width, depth_cam.height),
+            background_behind: false,
+            foreground: Vec::with_capacity(
+                (depth_cam.width / cell) as usize * (depth_cam.height / cell) as usize,
+            ),
+            seeds: Vec::with_capacity(128),
+            centres: Vec::with_capacity(config.redetect.candidates),
+            pending: VecDeque::with_capacity(places),
+            frame: None,
+            scene: scene.to_vec(),
+            searches: vec![Search::default(); objects],
+            checks: Vec::with_capacity(places),
+            results: Vec::with_capacity(places),
+            probes,
+        }
+    }
+
+    /// Folds `frame`, the depth frame of the latest depth tick, into the background if it is not yet.
+    pub(super) fn catch_up(&mut self, frame: &DepthFrame) {
+        if self.background_behind {
+            self.background.update(frame);
+            self.background_behind = false;
+        }
+    }
+}
+
+impl EventTrack6d {
+    /// At a depth frame exposed at `exposed_us` and used at the tick `t_us`: plans the search for every object
+    /// that needs one (not `tracking`, and not merely partly hidden; see
+    /// [`crate::track::object::ObjectTrack::needs_search`]): where it was estimated at the exposure (predicted,
+    /// for a frame on time), then the object-sized clusters of foreground (with that orientation and with its
+    /// longest axis along the cluster's). A late frame shows where the object was at its exposure, so it is
+    /// searched for there; an object whose estimates do not reach back to the exposure is not searched for on
+    /// that frame. Places left over from the previous frame are dropped and counted.
+    pub(super) fn plan_redetection(&mut self, t_us: i64, exposed_us: i64) {
+        let cfg = self.config.redetect;
+        let r = &mut self.redetection;
+        self.counters.redetect_places_dropped += r.pending.len() as u64;
+        r.pending.clear();
+        r.frame = Some((self.depth.index, exposed_us));
+        let at_frame = |o: &ObjectTrack| {
+            if exposed_us < t_us {
+                o.history().at(exposed_us)
+            } else {
+                Some(o.predicted)
+            }
+        };
+        for (s, o) in r.scene.iter_mut().zip(&self.objects) {
+            s.pose = at_frame(o).unwrap_or(o.predicted);
+        }
+        let mut foreground_ready = false;
+        for k in 0..self.objects.len() {
+            let o = &self.objects[k];
+            r.searches[k] = Search::default();
+            if !o.needs_search(&self.config.quality) || t_us < o.t_us {
+                continue;
+            }
+            let Some(here) = at_frame(o) else {
+                continue;
+            };
+            if !foreground_ready {
+                r.catch_up(&self.depth);
+                r.foreground.clear();
+                let noise = self.config.depth_term;
+                let margin = |z: f64| {
+                    let sigma = noise.sigma_0 + noise.sigma_z2 * z * z;
+                    cfg.foreground_margin_m.max(cfg.foreground_sigmas * sigma)
+                };
+                r.background
+                    .foreground(&self.depth, &self.rig.depth, margin, &mut r.foreground);
+                foreground_ready = true;
+            }
+            r.centres.clear();
+            cluster_centres(
+                &r.foreground,
+                0.5 * o.diameter,
+                // The visible surface lies in front of the centre by about half the thinnest extent.
+                0.5 * (o.aabb_max - o.aabb_min).min(),
+                cfg.candidates,
+                &mut r.seeds,
+                &mut r.centres,
+            );
+            if r.centres.is_empty() {
+                continue;
+            }
+            let here_centre = o.center_at(&here);
+            // Samples the object's two largest box extents cover at 1 m.
+            let size = o.aabb_max - o.aabb_min;
+            // The object's longest box axis, object frame.
+            let long_axis = Vector3::ith_axis(size.imax()).into_inner();
+            let mut extent = size.data.0[0];
+            extent.sort_by(|a, b| b.total_cmp(a));
+            let min_support = cfg.min_support
+                * extent[0]
+                * extent[1]
+                * r.background.samples_per_m2_at_1m(&self.rig.depth);
+            let before = r.pending.len();
+            r.pending.push_back(PendingPlace {
+                object: k,
+                start: here,
+                estimated: true,
+            });
+            for cluster in &r.centres {
+                let centre = cluster.centre;
+                if (centre - here_centre).norm() < 0.25 * o.diameter
+                    || (cluster.support as f64)
+                        < (min_support / (centre.z * centre.z).max(1e-6)).max(8.0)
+                {
+                    continue;
+                }
+                // Orientations: the estimated one, and the estimated one turned the least that lays the
+                // object's longest axis along the cluster's principal axis.
+                let current = here.rotation * long_axis;
+                let target = if current.dot(&cluster.axis) >= 0.0 {
+                    cluster.axis
+                } else {
+                    -cluster.axis
+                };
+                let aligned = UnitQuaternion::rotation_between(&current, &target)
+                    .map(|q| q * here.rotation)
+                    .filter(|_| current.angle(&target) > 15f64.to_radians());
+                for rotation in [Some(here.rotation), aligned].into_iter().flatten() {
+                    r.pending.push_back(PendingPlace {
+                        object: k,
+                        start: Isometry3::from_parts(
+                            Translation3::from(centre.coords - rotation * o.center_obj),
+                            rotation,
+                        ),
+                        estimated: false,
+                    });
+                }
+            }
+            r.searches[k].remaining = r.pending.len() - before;
+        }
+    }
+
+    /// Checks up to `places_per_tick` pending places (all of them when it is 0, or for a tracker that refines only
+    /// at depth frames) against the depth frame they were planned on, split over the tracker's threads; an object
+    /// whose search is complete moves to its best place if that scores clearly better than its estimate did. A
+    /// search is abandoned when the object is `tracking` again. Every check sees the other objects where they were
+    /// at the frame's exposure; the moves are made after all of them. A place found on a late frame is where the
+    /// object was at its exposure ([`ObjectTrack::relocate_on`] says how it is carried on).
+    pub(super) fn continue_redetection(&mut self, dt_s: f64) {
+        let cfg = self.config.redetect;
+        // A tracker that refines only at depth frames (`depth30`) has no ticks in between to spread over.
+        let budget = if cfg.places_per_tick == 0 || self.config.depth == DepthUse::DepthFramesOnly {
+            usize::MAX
+        } else {
+            cfg.places_per_tick
+        };
+        let Some((frame_index, frame_t_us)) = self.redetection.frame else {
+            return;
+        };
+        let r = &mut self.redetection;
+        if frame_index != self.depth.index {
+            self.counters.redetect_places_dropped += r.pending.len() as u64;
+            r.pending.clear();
+            return;
+        }
+        r.checks.clear();
+        while r.checks.len() < budget {
+            let Some(place) = r.pending.pop_front() else {
+                break;
+            };
+            if self.objects[place.object].state == TrackingState::Tracking {
+                r.searches[place.object].remaining -= 1;
+                continue;
+            }
+            r.checks.push(place);
+        }
+        if r.checks.is_empty() {
+            return;
+        }
+        self.counters.redetect_places_checked += r.checks.len() as u64;
+        r.results.clear();
+        r.results.resize(r.checks.len(), None);
+        let check = PlaceCheck {
+            objects: &self.objects,
+            scene: &r.scene,
+            camera: &self.rig.event_camera,
+            config: &self.config,
+            inputs: TickInputs {
+                t_us: frame_t_us,
+                dt_s,
+                depth: Some(&self.depth),
+                depth_exposed_us: frame_t_us,
+                surface: &self.surface,
+                camera: &self.rig.event_camera,
+                depth_rig: &self.rig.depth,
+            },
+        };
+        self.counters.render_errors += check.run_split(
+            &r.checks,
+            &mut r.results,
+            &mut r.probes,
+            self.renderer.as_mut(),
+            &mut self.workers,
+            &mut self.threads,
+        );
+        for (place, result) in r.checks.iter().zip(&r.results) {
+            let k = place.object;
+            let search = &mut r.searches[k];
+            search.remaining -= 1;
+            if place.estimated {
+                search.here = result.map_or(0.0, |(score, _)| score);
+            } else if let Some((score, pose)) = *result
+                && search.best.is_none_or(|(b, _)| score > b)
+            {
+                search.best = Some((score, pose));
+            }
+            if search.remaining == 0
+                && let Some((score, pose)) = search.best
+                && score >= cfg.min_score
+                && score > search.here + cfg.margin
+            {
+                let o = &mut self.objects[k];
+                o.relocate_on(&self.depth, &self.rig.depth, pose, frame_t_us, &self.config);
+                self.scene[k].pose = o.predicted;
+            }
+        }
+    }
+}

@@ -1,0 +1,338 @@
+//! Tracking again from a late depth frame's exposure. A live depth camera delivers a frame tens of milliseconds
+//! after its exposure, so the ticks in between were tracked on events alone. When the frame arrives, the tracker
+//! goes back to its state at the exposure tick (saved then), the event surface back to its events then, and
+//! tracks those ticks again with the frame in place, as if it had come in time; then it tracks the current tick.
+//! The poses already published for those ticks stand; from the current tick on, the estimates are the ones an
+//! on-time frame would have given.
+//!
+//! The work is done when the frame arrives ([`EventTrack6d::retrack_on_arrival`], from `push_depth`): a live
+//! camera's frame comes between two ticks, so the ticks tracked again then stay out of the next tick's latency
+//! unless they take longer than the time left until it. A frame that cannot be placed then (no state at its
+//! exposure, or its events left the log) is left to the next tick, which carries it and counts it.
+
+use super::EventTrack6d;
+use crate::recon::SurfaceLog;
+use crate::track::PoseTracker;
+use crate::track::object::ObjectSnapshot;
+use crate::track::{DepthFallbackCheck, PoseEstimate};
+use drivers::timeline::Tick;
+use scene::render::SceneObject;
+use std::collections::VecDeque;
+
+/// Where a frame handed over deferred is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Deferred {
+    /// None waits.
+    No,
+    /// It waits for the next tick.
+    BeforeTick,
+    /// The tick carried the frame exposed then; tracking again from there waits for `prepare_next_tick`.
+    AfterTick(i64),
+    /// The next tick carries it, and it is not tracked again (the caller has fallen behind).
+    CarryOnly,
+}
+
+/// Half a tick period, microseconds: a depth frame belongs to the tick whose time is this close to its exposure.
+const SAME_TICK_US: i64 = 4_200;
+
+/// The tracker's state at one depth-exposure tick, before that tick ran.
+#[derive(Debug)]
+struct ExposureState {
+    tick: Tick,
+    objects: Vec<ObjectSnapshot>,
+    scene: Vec<SceneObject>,
+    last_tick_us: Option<i64>,
+    /// Position of the event log then (the events pushed before the tick).
+    events_before: u64,
+}
+
+/// What tracking again from a late frame's exposure needs: the states at recent depth-exposure ticks, the ticks
+/// since the oldest, and the events since (with what each pixel held before them).
+#[derive(Debug)]
+pub(super) struct Retrack {
+    /// States at depth-exposure ticks whose frame has not come yet, oldest first.
+    states: VecDeque<ExposureState>,
+    /// Slots of states no longer needed, reused for the next ones.
+    spare: Vec<ExposureState>,
+    /// The ticks since the oldest state, oldest first, each with the event log's position then.
+    ticks: VecDeque<(Tick, u64)>,
+    /// The events since the oldest state.
+    pub(super) log: SurfaceLog,
+    /// The poses of the ticks tracked again (not published: those ticks' poses are out already).
+    replayed: Vec<PoseEstimate>,
+    /// The depth safety net's checks made while tracking again before the latest tick, reported as that tick's.
+    pub(super) checks: Vec<DepthFallbackCheck>,
+    /// Checks made while tracking again at a frame's arrival, reported with the next tick.
+    arrival_checks: Vec<DepthFallbackCheck>,
+}
+
+impl Retrack {
+    /// Keeps at most `max_events` events (each 24 bytes).
+    pub(super) fn new(max_events: usize) -> Self {
+        Self {
+            states: VecDeque::new(),
+            spare: Vec::new(),
+            ticks: VecDeque::new(),
+            log: SurfaceLog::new(max_events),
+            replayed: Vec::new(),
+            checks: Vec::new(),
+            arrival_checks: Vec::new(),
+        }
+    }
+
+    /// Whether any state is kept (events must then be logged).
+    pub(super) fn is_logging(&self) -> bool {
+        !self.states.is_empty()
+    }
+
+    /// Forgets the states older than `max_age_us` before `t_us`, and the ticks and events before the oldest
+    /// state left.
+    fn forget_before(&mut self, t_us: i64, max_age_us: i64) {
+        while let Some(s) = self.states.front() {
+            if t_us - s.tick.t_us <= max_age_us {
+                break;
+            }
+            if let Some(s) = self.states.pop_front() {
+                self.spare.push(s);
+            }
+        }
+        let (oldest, position) = self
+            .states
+            .front()
+            .map_or((t_us, self.log.end()), |s| (s.tick.t_us, s.events_before));
+        while self.ticks.front().is_some_and(|(k, _)| k.t_us < oldest) {
+            self.ticks.pop_front();
+        }
+        self.log.forget_before(position);
+    }
+
+    /// Forgets the states and ticks at or after `t_us`.
+    fn forget_from(&mut self, t_us: i64) {
+        while self.states.back().is_some_and(|s| s.tick.t_us >= t_us) {
+            if let Some(s) = self.states.pop_back() {
+                self.spare.push(s);
+            }
+        }
+        while self.ticks.back().is_some_and(|(k, _)| k.t_us >= t_us) {
+            self.ticks.pop_back();
+        }
+    }
+
+    /// Drops the states of ticks at or before `t_us` (their frames were used).
+    fn drop_states_until(&mut self, t_us: i64) {
+        while self.states.front().is_some_and(|s| s.tick.t_us <= t_us) {
+            if let Some(s) = self.states.pop_front() {
+                self.spare.push(s);
+            }
+        }
+    }
+}
+
+impl EventTrack6d {
+    /// When a depth frame arrives (it is waiting in `depth_t_us`): if it was exposed at a tick already run whose
+    /// state was saved, and the events since are still logged, tracks the ticks from that one to the latest
+    /// again with the frame in place (the frame is used up), and starts the next tick's renders from the new
+    /// estimates. Otherwise the frame waits for the next tick ([`Self::retrack_before`]).
+    pub(super) fn retrack_on_arrival(&mut self) {
+        let (Some(exposed_us), Some(last_us)) = (self.depth_t_us, self.last_tick_us) else {
+            return;
+        };
+        let Some(mut retrack) = self.retrack.take() else {
+            return;
+        };
+        let max_age_us = (self.config.max_depth_age_ms * 1e3) as i64;
+        let (times, count) = self.next_tick.candidates();
+        let next_us = if count > 0 { times[0] } else { last_us + 8_333 };
+        // The next tick would find the frame too old and drop it: it is not used here either.
+        let fresh = next_us - exposed_us <= max_age_us;
+        if fresh && let Some(k) = self.retrack_start(&retrack, exposed_us) {
+            let mut checks = std::mem::take(&mut retrack.arrival_checks);
+            self.track_again(&mut retrack, k, last_us + 1, &mut checks);
+            retrack.arrival_checks = checks;
+            self.retrack = Some(retrack);
+            self.prepared = false;
+            self.prepare_next_tick();
+        } else {
+            self.retrack = Some(retrack);
+        }
+    }
+
+    /// After a tick carried the late frame exposed at `exposed_us` (handed over deferred): tracks the ticks from
+    /// its exposure to that tick again with it, as [`Self::retrack_on_arrival`] would have before the tick. The
+    /// frame was counted, and its safety-net check reported, by the tick that carried it.
+    pub(super) fn retrack_deferred(&mut self, exposed_us: i64) {
+        let counted = self.counters;
+        self.depth_t_us = Some(exposed_us);
+        self.retrack_on_arrival();
+        if self.depth_t_us.take().is_some() {
+            self.counters.late_frames_not_retracked += 1;
+            return;
+        }
+        self.counters.depth_frames = counted.depth_frames;
+        self.counters.depth_frames_late = counted.depth_frames_late;
+        if let Some(r) = self.retrack.as_mut() {
+            r.arrival_checks.clear();
+        }
+    }
+
+    /// Before `tick` runs: if the depth frame waiting was exposed at an earlier tick whose state was saved, tracks
+    /// the ticks from that one to this one again with the frame in place (the frame is used up); then saves the
+    /// state if `tick` is a depth-exposure tick whose frame has not come.
+    pub(super) fn retrack_before(&mut self, tick: &Tick) {
+        let Some(mut retrack) = self.retrack.take() else {
+            return;
+        };
+        let max_age_us = (self.config.max_depth_age_ms * 1e3) as i64;
+        retrack.checks.clear();
+        // Checks made when a frame arrived since the last tick are this tick's.
+        let arrival_checks = retrack
+            .arrival_checks
+            .drain(..)
+            .map(|c| DepthFallbackCheck {
+                tick_us: tick.t_us,
+                ..c
+            });
+        retrack.checks.extend(arrival_checks);
+        let defer = self.deferred;
+        self.deferred = Deferred::No;
+        if let Some(exposed_us) = self.depth_t_us
+            && exposed_us < tick.t_us - SAME_TICK_US
+            && tick.t_us - exposed_us <= max_age_us
+        {
+            match self.retrack_start(&retrack, exposed_us) {
+                // This tick carries the frame; tracking again waits until its poses are out.
+                Some(_) if defer == Deferred::BeforeTick => {
+                    self.deferred = Deferred::AfterTick(exposed_us);
+                }
+                // Carried at this tick only: counted like a frame that could not be tracked again.
+                Some(_) if defer == Deferred::CarryOnly => {
+                    self.counters.late_frames_not_retracked += 1;
+                }
+                Some(k) => {
+                    let mut checks = std::mem::take(&mut retrack.checks);
+                    self.track_again(&mut retrack, k, tick.t_us, &mut checks);
+                    retrack.checks = checks;
+                }
+                None => self.counters.late_frames_not_retracked += 1,
+            }
+        }
+        let frame_here = self
+            .depth_t_us
+            .is_some_and(|td| (td - tick.t_us).abs() <= SAME_TICK_US);
+        // A clock that stood still or went back (a restarted replay) invalidates what was kept since.
+        retrack.forget_from(tick.t_us);
+        if tick.depth_frame.is_some() && !frame_here && max_age_us > 0 {
+            let mut state = retrack.spare.pop().unwrap_or_else(|| ExposureState {
+                tick: *tick,
+                objects: self.objects.iter().map(ObjectSnapshot::of).collect(),
+                scene: Vec::with_capacity(self.scene.len()),
+                last_tick_us: None,
+                events_before: 0,
+            });
+            if retrack.states.is_empty() {
+                // Events came unlogged until now: no earlier position is reachable.
+                retrack.log.forget_before(retrack.log.end());
+            }
+            self.save_state(tick, &mut state);
+            state.events_before = retrack.log.end();
+            retrack.states.push_back(state);
+        }
+        if retrack.is_logging() {
+            retrack.ticks.push_back((*tick, retrack.log.end()));
+        }
+        retrack.forget_before(tick.t_us, max_age_us);
+        self.retrack = Some(retrack);
+    }
+
+    /// Saves the tracker's state before `tick` into `state`, reusing its buffers.
+    fn save_state(&self, tick: &Tick, state: &mut ExposureState) {
+        state.tick = *tick;
+        for (o, s) in self.objects.iter().zip(&mut state.objects) {
+            o.save(s);
+        }
+        state.scene.clone_from(&self.scene);
+        state.last_tick_us = self.last_tick_us;
+    }
+
+    /// The index of the state saved at the tick of a frame exposed at `exposed_us`, if there is one and the event
+    /// log still reaches back to it.
+    fn retrack_start(&self, retrack: &Retrack, exposed_us: i64) -> Option<usize> {
+        let k = retrack
+            .states
+            .iter()
+            .position(|s| (s.tick.t_us - exposed_us).abs() <= SAME_TICK_US)?;
+        retrack
+            .log
+            .reaches(retrack.states[k].events_before)
+            .then_some(k)
+    }
+
+    /// Tracks the ticks from the one of state `k` to just before `now_us` again, with the waiting depth frame used
+    /// at the first of them, and leaves the surface at the latest event. The safety net's checks made on the way
+    /// go into `checks`, stamped `now_us`.
+    fn track_again(
+        &mut self,
+        retrack: &mut Retrack,
+        k: usize,
+        now_us: i64,
+        checks: &mut Vec<DepthFallbackCheck>,
+    ) {
+        let start_us = retrack.states[k].tick.t_us;
+        let wound = self
+            .surface
+            .wind_back(&mut retrack.log, retrack.states[k].events_before);
+        debug_assert!(
+            wound,
+            "retrack_start checked that the log reaches the state"
+        );
+        {
+            let state = &retrack.states[k];
+            for (o, s) in self.objects.iter_mut().zip(&state.objects) {
+                o.restore(s);
+            }
+            self.scene.clone_from(&state.scene);
+            self.last_tick_us = state.last_tick_us;
+        }
+        // The frame is treated as on time at its tick; what the replayed ticks count is not counted again.
+        let counted = self.counters;
+        self.depth_t_us = Some(start_us);
+        let mut ticks = 0;
+        let mut i = retrack.ticks.partition_point(|(t, _)| t.t_us < start_us);
+        while let Some(&(tick, events_before)) = retrack.ticks.get(i) {
+            if tick.t_us >= now_us {
+                break;
+            }
+            self.surface.wind_forward(&mut retrack.log, events_before);
+            if tick.t_us > start_us
+                && let Some(state) = retrack.states.iter_mut().find(|s| s.tick.t_us == tick.t_us)
+            {
+                // A later exposure's state, saved before this frame was in place: save it again.
+                self.save_state(&tick, state);
+            }
+            retrack.replayed.clear();
+            self.step_tick(&tick, &mut retrack.replayed, false);
+            // The safety net's checks of the frame, made now: reported with the tick that made them.
+            checks.extend(
+                self.objects
+                    .iter()
+                    .filter_map(|o| o.fallback_check)
+                    .filter(|c| c.tick_us == tick.t_us)
+                    .map(|c| DepthFallbackCheck {
+                        tick_us: now_us,
+                        ..c
+                    }),
+            );
+            ticks += 1;
+            i += 1;
+        }
+        self.surface.wind_forward(&mut retrack.log, u64::MAX);
+        retrack.drop_states_until(start_us);
+        self.depth_t_us = None;
+        self.counters.ticks = counted.ticks;
+        self.counters.depth_frames = counted.depth_frames + 1;
+        self.counters.depth_frames_late = counted.depth_frames_late + 1;
+        self.counters.depth_frames_unused = counted.depth_frames_unused;
+        self.counters.late_frames_retracked += 1;
+        self.counters.ticks_retracked += ticks;
+    }
+}
