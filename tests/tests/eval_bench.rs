@@ -5,10 +5,10 @@
 
 use drivers::recording::Recording;
 use eval::bench::{
-    MethodResults, SuiteSequence, expand_seeds, method_from_spec, open_sequence, results_json,
-    results_markdown, run_sequence,
+    MethodResults, SuiteSequence, expand_seeds, method_from_spec, open_sequence, run_sequence,
 };
 use eval::quality_report::method_quality_report;
+use eval::report::{results_json, results_markdown};
 use eval::{AucLimit, evaluate_object};
 use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};

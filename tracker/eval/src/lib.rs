@@ -11,9 +11,7 @@
 pub mod bench;
 mod bop;
 mod frame;
-mod harness_checks;
 mod kdtree;
-mod method;
 mod overlay;
 pub mod plot;
 mod pose_error;
@@ -24,13 +22,13 @@ pub mod seed_spread;
 mod sequence;
 mod vsd;
 
+pub use bench::{InitNoise, TrackerMethod};
 pub use bop::{BOP_CSV_HEADER, BopRow, format_bop_csv};
 pub use frame::{
     EvalCameras, EvalModel, FrameEvaluator, FrameScore, MAX_MODEL_POINTS, MIN_MODEL_POINTS,
     PoseErrors, score_errors,
 };
 pub use kdtree::KdTree;
-pub use method::{InitNoise, TrackerMethod};
 pub use overlay::{OverlayRenderer, OverlayWriter, overlay_strip};
 pub use pose_error::{add, add_s, mspd, mssd};
 pub use recall::{

@@ -3,7 +3,7 @@
 //! did not"): the rank correlation of quality with the error, the median error by quality band, and `lost`
 //! against true failure per sequence.
 
-use super::bench::{MethodResults, SequenceResult};
+use super::bench::results::{MethodResults, SequenceResult};
 use serde::Serialize;
 
 /// Lower edges of the quality bands, highest first; each band reaches up to the next higher edge (the first to 1).

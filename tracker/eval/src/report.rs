@@ -1,6 +1,6 @@
 //! The benchmark report: `results.md` (tables shaped like the paper's Table 1) and `results.json`.
 
-use super::bench::MethodResults;
+use super::bench::results::MethodResults;
 use super::quality_report::{QualityReport, method_quality_report};
 use super::recall::AucLimit;
 use super::seed_spread::{seed_spread_markdown, seed_spreads};

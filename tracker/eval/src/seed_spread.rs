@@ -3,7 +3,7 @@
 //! raised `lost`. One run of a suite cannot tell a change's effect from the tracker's sensitivity to its start;
 //! the spread over seeds can.
 
-use super::bench::MethodResults;
+use super::bench::results::MethodResults;
 use super::quality_report::{method_quality_report, sequence_label};
 use super::recall::AucLimit;
 use serde::Serialize;

@@ -1,7 +1,9 @@
 //! The depth modality: robust, occlusion-aware point-to-plane residuals between the model's visible surface at
 //! the hypothesis and the reconstructed depth `D_t` (projective association in the ROI camera).
 
-use super::{ModelView, NormalEquations};
+use super::modality::Modality;
+use super::model_view::ModelView;
+use super::normal_equations::NormalEquations;
 use crate::recon::DepthImage;
 use nalgebra::{Isometry3, Vector3};
 use scene::geometry::PinholeCamera;
@@ -130,5 +132,54 @@ impl DepthTerm {
             ne.add_point(&(-n), &(p - *c), r, robust / (sigma * sigma));
         }
         stats
+    }
+}
+
+/// The depth term as a [`Modality`] for one refinement: the model's surface against `depth`, an image in
+/// `camera` (the ROI's), with the counts of its latest accumulation.
+#[derive(Debug)]
+pub struct DepthModality<'a> {
+    /// Whether it takes part in this refinement.
+    pub active: bool,
+    /// Parameters.
+    pub term: &'a DepthTerm,
+    /// The camera `depth` is an image of.
+    pub camera: &'a PinholeCamera,
+    /// The depth the model is compared with (`D_t`).
+    pub depth: &'a DepthImage,
+    /// Scale of the term in the sum (1 at a fresh depth frame, less for carried depth).
+    pub weight: f64,
+    /// The counts of the latest accumulation; `None` before the first.
+    pub stats: Option<DepthTermStats>,
+}
+
+impl Modality for DepthModality<'_> {
+    fn name(&self) -> &'static str {
+        "depth"
+    }
+
+    fn is_active(&self) -> bool {
+        self.active
+    }
+
+    fn weight(&self) -> f64 {
+        self.weight
+    }
+
+    /// Depth points match by projection at every accumulation: nothing to do here.
+    fn correspond(&mut self, _view: &ModelView, _pose: &Isometry3<f64>) {}
+
+    fn accumulate(
+        &mut self,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        center_obj: &Vector3<f64>,
+        ne: &mut NormalEquations,
+    ) {
+        self.stats =
+            Some(
+                self.term
+                    .accumulate(view, pose, center_obj, self.camera, self.depth, ne),
+            );
     }
 }

@@ -7,7 +7,10 @@
 //! term, whose window leaves one). Along each contour point's image normal the strongest step of `I_t` within
 //! reach is the observed outline; its offset from the projected contour is the residual.
 
-use super::{ContourResiduals, ModelView, NormalEquations};
+use super::contour::ContourResiduals;
+use super::modality::Modality;
+use super::model_view::ModelView;
+use super::normal_equations::NormalEquations;
 use crate::recon::EventSurface;
 use nalgebra::{Isometry3, Vector3};
 use scene::geometry::PinholeCamera;
@@ -155,5 +158,62 @@ impl IntensityEdges {
     /// Residuals that contributed to the last accumulation.
     pub fn active(&self) -> usize {
         self.active
+    }
+}
+
+/// The intensity-edge term as a [`Modality`] for one refinement: the outline against the edges of `I_t` in
+/// `surface` at `t_us`, seen by the full event `camera`.
+#[derive(Debug)]
+pub struct IntensityModality<'a> {
+    /// Whether it takes part in this refinement.
+    pub active: bool,
+    /// Parameters (its weight is the term's scale in the sum).
+    pub term: &'a IntensityTerm,
+    /// The matches and scratch, reused from tick to tick.
+    pub edges: &'a mut IntensityEdges,
+    /// The full event camera.
+    pub camera: &'a PinholeCamera,
+    /// The event state holding `I_t`.
+    pub surface: &'a EventSurface,
+    /// The tick time, microseconds.
+    pub t_us: i64,
+    /// The ROI render's pixel size in full-image pixels.
+    pub roi_bin_px: f64,
+}
+
+impl Modality for IntensityModality<'_> {
+    fn name(&self) -> &'static str {
+        "intensity"
+    }
+
+    fn is_active(&self) -> bool {
+        self.active
+    }
+
+    fn weight(&self) -> f64 {
+        self.term.weight
+    }
+
+    fn correspond(&mut self, view: &ModelView, pose: &Isometry3<f64>) {
+        self.edges.associate(
+            self.term,
+            view,
+            pose,
+            self.camera,
+            self.surface,
+            self.t_us,
+            self.roi_bin_px,
+        );
+    }
+
+    fn accumulate(
+        &mut self,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        center_obj: &Vector3<f64>,
+        ne: &mut NormalEquations,
+    ) {
+        self.edges
+            .accumulate(self.term, view, pose, center_obj, self.camera, ne);
     }
 }

@@ -1,6 +1,5 @@
 //! Mesh measurements: bounding box, area, diameter and area-weighted surface sampling.
 
-use super::Mesh;
 use nalgebra::{Point3, Vector3};
 use rand::Rng;
 
@@ -106,51 +105,46 @@ pub(crate) fn diameter(points: &[Point3<f32>]) -> f64 {
     best
 }
 
-impl Mesh {
-    /// Samples `count` points uniformly over the surface (area-weighted over triangles, uniform within each), using
-    /// `rng` so that callers control determinism.
-    pub fn sample_surface<R: Rng + ?Sized>(&self, count: usize, rng: &mut R) -> Vec<SurfacePoint> {
-        let positions = self.positions();
-        let mut cumulative = Vec::with_capacity(self.triangles().len());
-        let mut acc = 0.0;
-        for t in self.triangles() {
-            acc += triangle_area(&triangle_vertices(positions, t));
-            cumulative.push(acc);
-        }
-        let total = acc;
-        (0..count)
-            .map(|_| {
-                let target = rng.random::<f64>() * total;
-                // First triangle whose cumulative area exceeds the target; zero-area triangles are never chosen.
-                let idx = cumulative
-                    .partition_point(|&c| c <= target)
-                    .min(cumulative.len() - 1);
-                let v = triangle_vertices(positions, &self.triangles()[idx]);
-                let (r1, r2) = (rng.random::<f64>(), rng.random::<f64>());
-                let s = r1.sqrt();
-                let (b0, b1, b2) = (1.0 - s, s * (1.0 - r2), s * r2);
-                let position = Point3::from(v[0].coords * b0 + v[1].coords * b1 + v[2].coords * b2);
-                let n = (v[1] - v[0]).cross(&(v[2] - v[0]));
-                let normal = if n.norm() > 0.0 {
-                    n.normalize()
-                } else {
-                    Vector3::z()
-                };
-                SurfacePoint {
-                    position,
-                    normal,
-                    triangle: idx as u32,
-                }
-            })
-            .collect()
+/// Samples `count` points uniformly over the surface of `triangles` (area-weighted over triangles, uniform within
+/// each), using `rng` so that callers control determinism. Indices must be in range and `triangles` not empty.
+pub(crate) fn sample_surface<R: Rng + ?Sized>(
+    positions: &[Point3<f32>],
+    triangles: &[[u32; 3]],
+    count: usize,
+    rng: &mut R,
+) -> Vec<SurfacePoint> {
+    let mut cumulative = Vec::with_capacity(triangles.len());
+    let mut acc = 0.0;
+    for t in triangles {
+        acc += triangle_area(&triangle_vertices(positions, t));
+        cumulative.push(acc);
     }
-
-    /// [`Mesh::sample_surface`] with a ChaCha8 generator seeded by `seed` (deterministic across platforms).
-    pub fn sample_surface_seeded(&self, count: usize, seed: u64) -> Vec<SurfacePoint> {
-        use rand::SeedableRng;
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-        self.sample_surface(count, &mut rng)
-    }
+    let total = acc;
+    (0..count)
+        .map(|_| {
+            let target = rng.random::<f64>() * total;
+            // First triangle whose cumulative area exceeds the target; zero-area triangles are never chosen.
+            let idx = cumulative
+                .partition_point(|&c| c <= target)
+                .min(cumulative.len() - 1);
+            let v = triangle_vertices(positions, &triangles[idx]);
+            let (r1, r2) = (rng.random::<f64>(), rng.random::<f64>());
+            let s = r1.sqrt();
+            let (b0, b1, b2) = (1.0 - s, s * (1.0 - r2), s * r2);
+            let position = Point3::from(v[0].coords * b0 + v[1].coords * b1 + v[2].coords * b2);
+            let n = (v[1] - v[0]).cross(&(v[2] - v[0]));
+            let normal = if n.norm() > 0.0 {
+                n.normalize()
+            } else {
+                Vector3::z()
+            };
+            SurfacePoint {
+                position,
+                normal,
+                triangle: idx as u32,
+            }
+        })
+        .collect()
 }
 
 #[cfg(test)]

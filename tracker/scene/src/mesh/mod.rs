@@ -243,4 +243,21 @@ impl Mesh {
     pub fn surface_area(&self) -> f64 {
         self.area
     }
+
+    /// Samples `count` points uniformly over the surface (area-weighted over triangles, uniform within each), using
+    /// `rng` so that callers control determinism.
+    pub fn sample_surface<R: rand::Rng + ?Sized>(
+        &self,
+        count: usize,
+        rng: &mut R,
+    ) -> Vec<SurfacePoint> {
+        measure::sample_surface(self.positions(), self.triangles(), count, rng)
+    }
+
+    /// [`Mesh::sample_surface`] with a ChaCha8 generator seeded by `seed` (deterministic across platforms).
+    pub fn sample_surface_seeded(&self, count: usize, seed: u64) -> Vec<SurfacePoint> {
+        use rand::SeedableRng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        self.sample_surface(count, &mut rng)
+    }
 }

@@ -5,10 +5,10 @@ use crate::evaluate::AucArg;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use eval::bench::{
-    MethodResults, SuiteSequence, expand_seeds, method_from_spec_timed, open_sequence,
-    results_json, results_markdown, run_sequence,
+    MethodResults, SuiteSequence, expand_seeds, method_from_spec_timed, open_sequence, run_sequence,
 };
 use eval::plot::line_plot;
+use eval::report::{results_json, results_markdown};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use tracker::recording::format_pose_csv;

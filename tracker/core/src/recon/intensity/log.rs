@@ -2,18 +2,17 @@
 //! back to an earlier time and brought forward again event by event, to the same state. The tracker uses it to
 //! track again from a late depth frame's exposure with the events as they were at each tick since.
 
-use super::EventSurface;
 use drivers::event::CdEvent;
 use std::collections::VecDeque;
 
 /// One integrated event and its pixel's state before it.
 #[derive(Debug, Clone, Copy)]
-struct LoggedEvent {
-    event: CdEvent,
+pub(super) struct LoggedEvent {
+    pub(super) event: CdEvent,
     /// The pixel's stored time offset before the event.
-    previous_time: i32,
+    pub(super) previous_time: i32,
     /// The pixel's log intensity before the event (0 for a surface that keeps times only).
-    previous_intensity: f32,
+    pub(super) previous_intensity: f32,
 }
 
 /// A bounded log of the events integrated through [`EventSurface::integrate_logged`]. Each event has a position:
@@ -22,12 +21,12 @@ struct LoggedEvent {
 /// Grows to the events it must hold once, then allocates no more.
 #[derive(Debug, Clone)]
 pub struct SurfaceLog {
-    entries: VecDeque<LoggedEvent>,
+    pub(super) entries: VecDeque<LoggedEvent>,
     capacity: usize,
     /// Position of `entries[0]`; positions before it cannot be reached.
-    first: u64,
+    pub(super) first: u64,
     /// Position up to which the events are applied to the surface (the end of the log unless wound back).
-    applied: u64,
+    pub(super) applied: u64,
     /// Events that left the log because it was full.
     overflowed: u64,
 }
@@ -82,13 +81,14 @@ impl SurfaceLog {
     }
 
     /// Forgets every event (the surface's stored times were rebased): no earlier position can be reached.
-    fn restart(&mut self) {
+    pub(super) fn restart(&mut self) {
         self.first = self.end();
         self.entries.clear();
         self.applied = self.first;
     }
 
-    fn push(&mut self, entry: LoggedEvent) {
+    /// Logs `entry`, the oldest leaving once the log is full.
+    pub(super) fn push(&mut self, entry: LoggedEvent) {
         if self.entries.len() >= self.capacity {
             self.overflowed += 1;
             if self.entries.pop_front().is_none() {
@@ -104,81 +104,10 @@ impl SurfaceLog {
     }
 }
 
-impl EventSurface {
-    /// [`Self::integrate`], recording each event in `log` with its pixel's state before it. `log` must be at its
-    /// latest state (not wound back).
-    pub fn integrate_logged(&mut self, events: &[CdEvent], log: &mut SurfaceLog) {
-        debug_assert!(log.at_latest(), "integrating into a wound-back surface");
-        for e in events {
-            let Some(i) = self.pixel_of(e) else {
-                self.out_of_bounds += 1;
-                continue;
-            };
-            let entry = LoggedEvent {
-                event: *e,
-                previous_time: self.last_us[i],
-                previous_intensity: self.log_intensity.get(i).copied().unwrap_or(0.0),
-            };
-            let rebases = self.rebases;
-            self.apply(e);
-            log.push(entry);
-            if self.rebases != rebases {
-                // The stored times moved: the logged ones no longer match them.
-                log.restart();
-            }
-        }
-        self.events += events.len() as u64;
-    }
-
-    /// Winds the surface back to `position` of `log` (as it was when that many events had been logged), undoing
-    /// the later events newest first. Returns `false`, changing nothing, if the log no longer reaches it.
-    pub fn wind_back(&mut self, log: &mut SurfaceLog, position: u64) -> bool {
-        if !log.reaches(position) {
-            return false;
-        }
-        if position >= log.applied {
-            return true;
-        }
-        let (from, to) = (
-            (position - log.first) as usize,
-            (log.applied - log.first) as usize,
-        );
-        let width = self.width as usize;
-        let undone = log.entries.range(from..to).rev();
-        if self.log_intensity.is_empty() {
-            for entry in undone {
-                self.last_us[entry.event.y as usize * width + entry.event.x as usize] =
-                    entry.previous_time;
-            }
-        } else {
-            for entry in undone {
-                let i = entry.event.y as usize * width + entry.event.x as usize;
-                self.last_us[i] = entry.previous_time;
-                self.log_intensity[i] = entry.previous_intensity;
-            }
-        }
-        log.applied = position;
-        true
-    }
-
-    /// Applies the logged events not yet applied, oldest first, up to `position` (at most the log's end). The
-    /// surface ends as it was when those events first came.
-    pub fn wind_forward(&mut self, log: &mut SurfaceLog, position: u64) {
-        let until = position.min(log.end()).max(log.applied);
-        let (from, to) = (
-            (log.applied - log.first) as usize,
-            (until - log.first) as usize,
-        );
-        for entry in log.entries.range(from..to) {
-            self.apply(&entry.event);
-        }
-        log.applied = until;
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::recon::EventSurface;
     use crate::recon::IntensityFilterConfig;
     use proptest::prelude::*;
 

@@ -11,6 +11,7 @@
 use drivers::event::CdEvent;
 
 mod log;
+use log::LoggedEvent;
 pub use log::SurfaceLog;
 
 /// Parameters of the log-intensity filter.
@@ -306,6 +307,76 @@ impl EventSurface {
         let last = self.base_us.unwrap_or(0) + i64::from(self.last_us[i]);
         let dt = (t_us - last).max(0) as f32;
         self.log_intensity[i] * decay(self.config.cutoff_hz * 1e-6 * dt)
+    }
+
+    /// [`Self::integrate`], recording each event in `log` with its pixel's state before it. `log` must be at its
+    /// latest state (not wound back).
+    pub fn integrate_logged(&mut self, events: &[CdEvent], log: &mut SurfaceLog) {
+        debug_assert!(log.at_latest(), "integrating into a wound-back surface");
+        for e in events {
+            let Some(i) = self.pixel_of(e) else {
+                self.out_of_bounds += 1;
+                continue;
+            };
+            let entry = LoggedEvent {
+                event: *e,
+                previous_time: self.last_us[i],
+                previous_intensity: self.log_intensity.get(i).copied().unwrap_or(0.0),
+            };
+            let rebases = self.rebases;
+            self.apply(e);
+            log.push(entry);
+            if self.rebases != rebases {
+                // The stored times moved: the logged ones no longer match them.
+                log.restart();
+            }
+        }
+        self.events += events.len() as u64;
+    }
+
+    /// Winds the surface back to `position` of `log` (as it was when that many events had been logged), undoing
+    /// the later events newest first. Returns `false`, changing nothing, if the log no longer reaches it.
+    pub fn wind_back(&mut self, log: &mut SurfaceLog, position: u64) -> bool {
+        if !log.reaches(position) {
+            return false;
+        }
+        if position >= log.applied {
+            return true;
+        }
+        let (from, to) = (
+            (position - log.first) as usize,
+            (log.applied - log.first) as usize,
+        );
+        let width = self.width as usize;
+        let undone = log.entries.range(from..to).rev();
+        if self.log_intensity.is_empty() {
+            for entry in undone {
+                self.last_us[entry.event.y as usize * width + entry.event.x as usize] =
+                    entry.previous_time;
+            }
+        } else {
+            for entry in undone {
+                let i = entry.event.y as usize * width + entry.event.x as usize;
+                self.last_us[i] = entry.previous_time;
+                self.log_intensity[i] = entry.previous_intensity;
+            }
+        }
+        log.applied = position;
+        true
+    }
+
+    /// Applies the logged events not yet applied, oldest first, up to `position` (at most the log's end). The
+    /// surface ends as it was when those events first came.
+    pub fn wind_forward(&mut self, log: &mut SurfaceLog, position: u64) {
+        let until = position.min(log.end()).max(log.applied);
+        let (from, to) = (
+            (log.applied - log.first) as usize,
+            (until - log.first) as usize,
+        );
+        for entry in log.entries.range(from..to) {
+            self.apply(&entry.event);
+        }
+        log.applied = until;
     }
 }
 

@@ -1,26 +1,36 @@
-//! Contrast maximisation of [`EventEdges`] ([`EventTermKind::ContrastMax`](super::EventTermKind)): the window's
+//! Contrast maximisation ([`EventTermKind::ContrastMax`](super::EventTermKind)): the window's
 //! events, each lifted to 3D with the rendered depth, are carried to the tick time by a candidate object velocity;
 //! the velocity whose image of warped events is sharpest (largest sum of squared bin counts) is the motion.
 
-use super::EventEdges;
+use super::bins::EventBins;
 use crate::recon::EventSurface;
 use nalgebra::{Point2, Point3, Vector3, Vector6};
 use scene::geometry::{PinholeCamera, Roi};
 
 /// One event for contrast maximisation: camera-frame point at the render's depth, and its age, seconds.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct LiftedEvent {
+struct LiftedEvent {
     point: Point3<f64>,
     age_s: f64,
 }
 
-impl EventEdges {
-    /// Lifts the kept events of the last [`EventEdges::collect`] to 3D: each pixel's latest event in the window at
+/// The window's events lifted to 3D, and the image of warped events, reused from tick to tick.
+#[derive(Debug, Clone, Default)]
+pub(super) struct ContrastMax {
+    /// The window's events lifted to 3D.
+    lifted: Vec<LiftedEvent>,
+    /// Scratch: the image of warped events on the ROI grid.
+    warped: Vec<f32>,
+}
+
+impl ContrastMax {
+    /// Lifts the kept events of `bins` to 3D: each pixel's latest event in the window at
     /// the depth the render (`depth`, `mask` on the ROI grid, object `id`) has at its bin, or at `center_z` where
     /// the render shows no object. At most `max_events`, evenly strided.
     #[allow(clippy::too_many_arguments)]
-    pub fn lift_events(
+    pub(super) fn lift_events(
         &mut self,
+        bins: &EventBins,
         surface: &EventSurface,
         camera: &PinholeCamera,
         depth: &[f32],
@@ -33,16 +43,16 @@ impl EventEdges {
     ) {
         self.lifted.clear();
         self.lifted.reserve(max_events + 1);
-        let Some(roi) = self.roi else { return };
-        let (w, h) = (self.width as usize, self.height as usize);
-        let sx = self.width as f64 / roi.width;
-        let sy = self.height as f64 / roi.height;
+        let Some(roi) = bins.roi else { return };
+        let (w, h) = (bins.width as usize, bins.height as usize);
+        let sx = bins.width as f64 / roi.width;
+        let sy = bins.height as f64 / roi.height;
         let x0 = roi.x.floor().max(0.0) as u32;
         let y0 = roi.y.floor().max(0.0) as u32;
         let x1 = ((roi.x + roi.width).ceil().max(0.0) as u32).min(surface.width());
         let y1 = ((roi.y + roi.height).ceil().max(0.0) as u32).min(surface.height());
         let since = t_us - window_us;
-        let total = self.stats.bins.max(1) * 4;
+        let total = bins.kept_bins.max(1) * 4;
         let stride = total.div_ceil(max_events.max(1)).max(1);
         let mut seen = 0usize;
         for y in y0..y1 {
@@ -52,7 +62,7 @@ impl EventEdges {
             }
             for x in surface.recent_in_row(y, x0, x1, 1, since, t_us) {
                 let i = ((f64::from(x) + 0.5 - roi.x) * sx) as usize;
-                if i >= w || !self.kept[j * w + i] {
+                if i >= w || !bins.kept[j * w + i] {
                     continue;
                 }
                 seen += 1;
@@ -80,16 +90,17 @@ impl EventEdges {
     /// `xi` (centre m/s, angular rad/s, camera frame) about `center`.
     fn warped_contrast(
         &mut self,
+        bins: &EventBins,
         camera: &PinholeCamera,
         roi: &Roi,
         center: &Point3<f64>,
         xi: &Vector6<f64>,
     ) -> f64 {
-        let (w, h) = (self.width as usize, self.height as usize);
+        let (w, h) = (bins.width as usize, bins.height as usize);
         self.warped.clear();
         self.warped.resize(w * h, 0.0);
-        let sx = self.width as f64 / roi.width;
-        let sy = self.height as f64 / roi.height;
+        let sx = bins.width as f64 / roi.width;
+        let sy = bins.height as f64 / roi.height;
         let v = Vector3::new(xi[0], xi[1], xi[2]);
         let omega = Vector3::new(xi[3], xi[4], xi[5]);
         for e in &self.lifted {
@@ -119,8 +130,10 @@ impl EventEdges {
     /// The object velocity (centre m/s, angular rad/s, camera frame, about `center`) that maximises the contrast
     /// of the lifted events, found by a pattern search from `start` (steps halve `rounds` times). Returns `start`
     /// when there are no events.
-    pub fn maximise_contrast(
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn maximise_contrast(
         &mut self,
+        bins: &EventBins,
         camera: &PinholeCamera,
         center: &Point3<f64>,
         start: &Vector6<f64>,
@@ -128,12 +141,12 @@ impl EventEdges {
         step_rotation: f64,
         rounds: u32,
     ) -> Vector6<f64> {
-        let Some(roi) = self.roi else { return *start };
+        let Some(roi) = bins.roi else { return *start };
         if self.lifted.len() < 10 {
             return *start;
         }
         let mut best = *start;
-        let mut score = self.warped_contrast(camera, &roi, center, &best);
+        let mut score = self.warped_contrast(bins, camera, &roi, center, &best);
         let mut steps = [
             step_translation,
             step_translation,
@@ -147,7 +160,7 @@ impl EventEdges {
                 for sign in [1.0, -1.0] {
                     let mut trial = best;
                     trial[k] += sign * steps[k];
-                    let s = self.warped_contrast(camera, &roi, center, &trial);
+                    let s = self.warped_contrast(bins, camera, &roi, center, &trial);
                     if s > score {
                         score = s;
                         best = trial;
@@ -162,8 +175,8 @@ impl EventEdges {
         best
     }
 
-    /// Events lifted by the last [`EventEdges::lift_events`].
-    pub fn lifted_events(&self) -> usize {
+    /// Events lifted by the last [`Self::lift_events`].
+    pub(super) fn lifted_events(&self) -> usize {
         self.lifted.len()
     }
 }

@@ -1,25 +1,47 @@
-//! Silhouette hinge residuals of [`EventEdges`] ([`super::EventTermKind::Hinge`]): events outside the
+//! Silhouette hinge residuals ([`super::EventTermKind::Hinge`]): events outside the
 //! silhouette push it outwards, contour points with no event under them are pulled in to the event cloud.
 
-use super::{EventEdges, EventTerm, grid_index};
+use super::bins::EventBins;
+use super::term::{EventTerm, grid_index};
 use crate::refine::{ModelView, NormalEquations, normal_offset};
 use nalgebra::{Isometry3, Vector3};
 use scene::geometry::PinholeCamera;
 
-impl EventEdges {
+/// The hinge's matches: each candidate's nearest contour point, and each contour point's nearest kept event bin
+/// inwards along its image normal.
+#[derive(Debug, Clone, Default)]
+pub(super) struct HingeMatches {
+    /// Nearest contour point index per candidate (`u32::MAX` = none within range).
+    association: Vec<u32>,
+    /// Per contour point, the nearest kept event bin along its image normal (full-image pixels), if any.
+    contour_match: Vec<Option<[f64; 2]>>,
+    /// Contour points projected at the association pose, full-image pixels (NaN behind the camera).
+    projected: Vec<[f64; 2]>,
+}
+
+impl HingeMatches {
+    /// Sizes the candidates' associations for `max_candidates`, so that steady-state ticks do not allocate.
+    pub(super) fn reserve(&mut self, max_candidates: usize) {
+        self.association.reserve(max_candidates + 1);
+    }
+
     /// Associates every candidate with its nearest contour point of `view` at `pose` (within the term's range),
     /// and every contour point with the nearest kept event bin inwards along its image normal.
-    pub(super) fn associate_hinge(
+    pub(super) fn associate(
         &mut self,
+        bins: &EventBins,
         term: &EventTerm,
         view: &ModelView,
         pose: &Isometry3<f64>,
         camera: &PinholeCamera,
     ) {
-        if let Some(roi) = self.roi {
-            let sx = f64::from(self.width) / roi.width;
-            let sy = f64::from(self.height) / roi.height;
-            let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+        self.association.clear();
+        self.contour_match.clear();
+        self.contour_match.reserve(view.contour.capacity());
+        if let Some(roi) = bins.roi {
+            let sx = f64::from(bins.width) / roi.width;
+            let sy = f64::from(bins.height) / roi.height;
+            let (wi, hi) = (i64::from(bins.width), i64::from(bins.height));
             let reach = (term.match_distance_px * sx).ceil() as i64;
             for cp in &view.contour {
                 let p = pose * cp.position;
@@ -31,7 +53,7 @@ impl EventEdges {
                     for k in 0..=reach {
                         let i = grid_index(fi - k as f64 * mx);
                         let j = grid_index(fj - k as f64 * my);
-                        if i >= 0 && j >= 0 && i < wi && j < hi && self.kept[(j * wi + i) as usize]
+                        if i >= 0 && j >= 0 && i < wi && j < hi && bins.kept[(j * wi + i) as usize]
                         {
                             return Some([
                                 roi.x - 0.5 + (i as f64 + 0.5) / sx,
@@ -58,7 +80,7 @@ impl EventEdges {
                 [f64::NAN, f64::NAN]
             });
         }
-        for e in &self.candidates {
+        for e in &bins.candidates {
             let mut best = (u32::MAX, max_d2);
             for (k, q) in self.projected.iter().enumerate() {
                 let du = q[0] - e[0];
@@ -74,9 +96,13 @@ impl EventEdges {
     }
 
     /// Accumulates the hinge residuals of the associated candidates, and the pull of contour points in to the
-    /// event cloud, at `pose` into `ne`. Returns how many candidates were active.
-    pub(super) fn accumulate_hinge(
-        &mut self,
+    /// event cloud, at `pose` into `ne`; `sweep` is each contour point's predicted sweep (full-image pixels along
+    /// its outward normal). Returns how many candidates were active.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn accumulate(
+        &self,
+        bins: &EventBins,
+        sweep: &[f64],
         term: &EventTerm,
         view: &ModelView,
         pose: &Isometry3<f64>,
@@ -87,12 +113,12 @@ impl EventEdges {
         let c = pose * nalgebra::Point3::from(*center_obj);
         let mut active = 0;
         let cutoff = 3.0 * term.sigma_px;
-        for (e, &a) in self.candidates.iter().zip(&self.association) {
+        for (e, &a) in bins.candidates.iter().zip(&self.association) {
             let Some(cp) = view.contour.get(a as usize) else {
                 continue;
             };
             // Behind a trailing edge the object has just uncovered the background: events there are expected.
-            let allowance = (-self.sweep.get(a as usize).copied().unwrap_or(0.0)).max(0.0);
+            let allowance = (-sweep.get(a as usize).copied().unwrap_or(0.0)).max(0.0);
             let p = pose * cp.position;
             let Some((offset, grad)) = normal_offset(camera, &p, cp.normal_2d, e) else {
                 continue;
@@ -115,18 +141,13 @@ impl EventEdges {
         // point with no event under it but events a little inwards lies outside the object: pull it in to the
         // event cloud's boundary (keeps the outline from growing to cover everything).
         let s2 = term.sigma_px * term.sigma_px;
-        let moving = self.sweep.iter().any(|s| s.abs() >= term.min_sweep_px);
-        for ((cp, m), &sweep) in view
-            .contour
-            .iter()
-            .zip(&self.contour_match)
-            .zip(&self.sweep)
-        {
+        let moving = sweep.iter().any(|s| s.abs() >= term.min_sweep_px);
+        for ((cp, m), &swept) in view.contour.iter().zip(&self.contour_match).zip(sweep) {
             let Some(e) = m else {
                 continue;
             };
             // Only a moving object fills its silhouette with events.
-            if !moving || sweep.is_nan() {
+            if !moving || swept.is_nan() {
                 continue;
             }
             let p = pose * cp.position;
@@ -139,7 +160,6 @@ impl EventEdges {
             let robust = 1.0 / (1.0 + (r / cutoff).powi(2));
             ne.add_point(&grad, &(p - c), r, term.match_weight * robust / s2);
         }
-        self.stats.active = active;
         active
     }
 }

@@ -1,30 +1,49 @@
-//! Correspondence lines of [`EventEdges`]: the events-to-no-events step along each contour normal and its
-//! residuals.
+//! Correspondence lines ([`super::EventTermKind::Lines`]): the events-to-no-events step along each contour
+//! normal and its residuals.
 
-use super::{EventEdges, EventTerm, grid_index};
+use super::bins::EventBins;
+use super::term::{EventTerm, grid_index};
 use crate::refine::{ContourResiduals, ModelView, NormalEquations};
 use nalgebra::{Isometry3, Vector3};
 use scene::geometry::PinholeCamera;
 
-impl EventEdges {
-    /// Finds, for every contour point of `view` at `pose`, the outline step on its correspondence line.
+/// The outline step found on each contour point's correspondence line.
+#[derive(Debug, Clone, Default)]
+pub(super) struct LineMatches {
+    /// Per contour point, the outline step found on its correspondence line (full-image pixels) and its contrast.
+    line_match: Vec<Option<([f64; 2], f64)>>,
+    /// Scratch: one correspondence line's occupancy samples (1 event, 0 none, -1 outside the ROI).
+    line_samples: Vec<i8>,
+}
+
+impl LineMatches {
+    /// Forgets the matches (a term of another kind finds none).
+    pub(super) fn clear(&mut self) {
+        self.line_match.clear();
+    }
+
+    /// Finds, for every contour point of `view` at `pose`, the outline step on its correspondence line; `sweep` is
+    /// each contour point's predicted sweep (full-image pixels along its outward normal).
     pub(super) fn find_steps(
         &mut self,
+        bins: &EventBins,
+        sweep: &[f64],
         term: &EventTerm,
         view: &ModelView,
         pose: &Isometry3<f64>,
         camera: &PinholeCamera,
     ) {
+        self.line_match.clear();
         self.line_match.reserve(view.contour.capacity());
-        let Some(roi) = self.roi else {
+        let Some(roi) = bins.roi else {
             self.line_match.resize(view.contour.len(), None);
             return;
         };
-        let sx = f64::from(self.width) / roi.width;
-        let sy = f64::from(self.height) / roi.height;
-        let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+        let sx = f64::from(bins.width) / roi.width;
+        let sy = f64::from(bins.height) / roi.height;
+        let (wi, hi) = (i64::from(bins.width), i64::from(bins.height));
         let k = term.line_box_bins.max(1) as i64;
-        for (cp, &sweep) in view.contour.iter().zip(&self.sweep) {
+        for (cp, &sweep) in view.contour.iter().zip(sweep) {
             let p = pose * cp.position;
             let Some(uv) = camera.project(&p) else {
                 self.line_match.push(None);
@@ -42,7 +61,7 @@ impl EventEdges {
                 let i = grid_index(fi + t as f64 * mx);
                 let j = grid_index(fj + t as f64 * my);
                 if i >= 0 && j >= 0 && i < wi && j < hi {
-                    i8::from(self.kept[(j * wi + i) as usize])
+                    i8::from(bins.kept[(j * wi + i) as usize])
                 } else {
                     -1
                 }
@@ -121,8 +140,10 @@ impl EventEdges {
     }
 
     /// Accumulates the correspondence-line residuals at `pose` into `ne`. Returns how many contributed.
-    pub(super) fn accumulate_lines(
-        &mut self,
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn accumulate(
+        &self,
+        sweep: &[f64],
         term: &EventTerm,
         view: &ModelView,
         pose: &Isometry3<f64>,
@@ -137,7 +158,7 @@ impl EventEdges {
             max_px: term.max_distance_px,
         };
         let mut active = 0;
-        for ((cp, m), &sweep) in view.contour.iter().zip(&self.line_match).zip(&self.sweep) {
+        for ((cp, m), &sweep) in view.contour.iter().zip(&self.line_match).zip(sweep) {
             let Some((e, contrast)) = m else {
                 continue;
             };
@@ -153,7 +174,6 @@ impl EventEdges {
                 active += 1;
             }
         }
-        self.stats.active = active;
         active
     }
 }

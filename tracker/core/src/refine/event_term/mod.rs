@@ -17,188 +17,102 @@
 //! events (lifted to 3D at the rendered depth) moves the previous estimate to the refinement's start. It measures
 //! motion only and scored far below the lines on the dev suite.
 
-mod collect;
+mod bins;
 mod contrast;
 mod hinge;
 mod lines;
 mod search;
+mod term;
 
-use super::{ModelView, NormalEquations};
+pub use bins::BinnedWindow;
+pub use term::{EventTerm, EventTermKind, EventTermStats};
+
+use super::modality::Modality;
+use super::model_view::ModelView;
+use super::normal_equations::NormalEquations;
 use crate::recon::EventSurface;
-pub use collect::BinnedWindow;
-use nalgebra::{Isometry3, Vector3, Vector6};
+use bins::EventBins;
+use contrast::ContrastMax;
+use hinge::HingeMatches;
+use lines::LineMatches;
+use nalgebra::{Isometry3, Point3, Vector3, Vector6};
 use scene::geometry::{PinholeCamera, Roi};
-use scene::render::MASK_EMPTY;
+use search::ShiftSearch;
 
-/// Nearest grid index of a sample position, `floor(x + 0.5)`, without the libm call `f64::round` makes on targets
-/// without SSE4.1 (it differs from `round` only at negative halves). Every negative index is out of range, so all
-/// of them map to -1.
-#[inline]
-fn grid_index(x: f64) -> i64 {
-    let v = x + 0.5;
-    if v >= 0.0 { v as i64 } else { -1 }
-}
-
-/// How events become residuals.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum EventTermKind {
-    /// Correspondence lines: along each contour point's image normal, the step from "events" (inside: the object's
-    /// texture and its swept band) to "no events" (the static background) is the outline; the residual is that
-    /// step's offset from the projected contour, less the band a trailing edge leaves. Lines whose outside is
-    /// full of events too (a hand, another object) find no step and drop out.
-    Lines,
-    /// Silhouette hinge: events outside the silhouette push it outwards, contour points with no event under
-    /// them are pulled in to the event cloud (biased by events next to the object, e.g. a holding hand).
-    Hinge,
-    /// Contrast maximisation with rendered depth: the window's events, lifted to 3D at the rendered depth, are
-    /// warped to the tick time by a candidate velocity; the sharpest image of warped events gives the motion,
-    /// which moves the previous estimate to the refinement's start (no event residuals in the refinement).
-    ContrastMax,
-}
-
-/// Parameters of the event term.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct EventTerm {
-    /// Which residual the events give.
-    pub kind: EventTermKind,
-    /// Correspondence lines: length of each side of the step detector, ROI bins.
-    pub line_box_bins: u32,
-    /// Correspondence lines: smallest step contrast (fraction of occupied bins inside minus outside) accepted.
-    pub line_min_contrast: f64,
-    /// Residual scale, full-image pixels.
-    pub sigma_px: f64,
-    /// Events farther than this from the silhouette (full-image pixels) are ignored.
-    pub max_distance_px: f64,
-    /// Minimum number of event bins in a 3x3 neighbourhood for a bin to count (noise filter).
-    pub min_neighbours: u8,
-    /// How far along its normal a contour point looks for an event edge, full-image pixels.
-    pub match_distance_px: f64,
-    /// Weight of the contour-to-edge pull relative to the uncovered-event hinge.
-    pub match_weight: f64,
-    /// Contour points whose predicted sweep in the window is below this (full-image pixels) expect no edge events
-    /// and take no part in the contour-to-edge pull.
-    pub min_sweep_px: f64,
-    /// Events up to this far outside the silhouette (full-image pixels) count as on it: the outline's own
-    /// anti-aliased pixels and the binning blur the edge by about a pixel.
-    pub edge_tolerance_px: f64,
-    /// Weight of the uncovered-event hinge.
-    pub hinge_weight: f64,
-    /// Before refining, the outline is searched for over image shifts up to this far (full-image pixels) for
-    /// the shift whose contour best separates events inside from none outside; 0 disables the search. Once the
-    /// motion is known the range shrinks to [`Self::search_speed_factor`] times the predicted image motion per
-    /// tick, but not below [`Self::search_min_px`].
-    pub search_px: f64,
-    /// Smallest search range, full-image pixels.
-    pub search_min_px: f64,
-    /// Search range as a multiple of the predicted image motion per tick.
-    pub search_speed_factor: f64,
-    /// A searched shift replaces the prediction only if its score beats the unshifted outline's by this
-    /// fraction of the contour points.
-    pub search_min_gain: f64,
-    /// Once the object's image motion is known (from the third depth frame on) and it slides more than it turns
-    /// (its centre moves 2 px per tick or more, and at least as far as turning moves its ends), of the
-    /// shifts that score within this fraction of twice the contour points of the best, the search takes the one
-    /// that moves the outline least across that motion (then least along it). An edge along the motion fires
-    /// no events, so the events hardly tell where the outline is across the motion: a long object moving
-    /// sideways scores alike at every shift along its length. 0 (default) takes the best score, the first of
-    /// equal ones in scan order; 0.05 measured dev +2.3 and holdout -1.9 ADD-S (BENCHMARKS.md, thirteenth round).
-    pub search_aperture_tolerance: f64,
-    /// Contrast maximisation: first step of the pattern search over the centre's velocity, m/s.
-    pub contrast_step_translation: f64,
-    /// Contrast maximisation: first step of the pattern search over the angular velocity, rad/s.
-    pub contrast_step_rotation: f64,
-    /// Contrast maximisation: halvings of the pattern search's steps.
-    pub contrast_rounds: u32,
-}
-
-impl Default for EventTerm {
-    fn default() -> Self {
-        Self {
-            kind: EventTermKind::Lines,
-            line_box_bins: 3,
-            line_min_contrast: 0.5,
-            sigma_px: 1.5,
-            max_distance_px: 12.0,
-            min_neighbours: 2,
-            match_distance_px: 6.0,
-            match_weight: 0.5,
-            min_sweep_px: 0.7,
-            edge_tolerance_px: 0.0,
-            hinge_weight: 1.0,
-            search_px: 30.0,
-            search_min_px: 8.0,
-            search_speed_factor: 2.0,
-            search_min_gain: 0.1,
-            search_aperture_tolerance: 0.0,
-            contrast_step_translation: 0.25,
-            contrast_step_rotation: 3.0,
-            contrast_rounds: 5,
-        }
-    }
-}
-
-/// What the event term saw in one evaluation.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct EventTermStats {
-    /// Event bins kept in the ROI after the noise filter.
-    pub bins: usize,
-    /// Kept bins outside the predicted silhouette (candidates).
-    pub outside: usize,
-    /// Candidates that contributed a non-zero residual.
-    pub active: usize,
-}
-
-/// The recent events of one ROI, binned on the ROI grid.
+/// The event term's working state for one ROI: the binned events of the tick's window, how far each contour
+/// point's motion swept it, and the matches and scratch of each kind of residual, reused from tick to tick.
 #[derive(Debug, Clone, Default)]
 pub struct EventEdges {
-    width: u32,
-    height: u32,
-    hits: Vec<u8>,
-    kept: Vec<bool>,
-    /// Centres of kept bins outside the predicted silhouette, full-image pixel coordinates.
-    candidates: Vec<[f64; 2]>,
-    /// Nearest contour point index per candidate (`u32::MAX` = none within range).
-    association: Vec<u32>,
-    /// Per contour point, the nearest kept event bin along its image normal (full-image pixels), if any.
-    contour_match: Vec<Option<[f64; 2]>>,
-    /// Per contour point, the outline step found on its correspondence line (full-image pixels) and its contrast.
-    line_match: Vec<Option<([f64; 2], f64)>>,
-    /// Scratch: one correspondence line's occupancy samples (1 event, 0 none, -1 outside the ROI).
-    line_samples: Vec<i8>,
-    /// Scratch: ROI column of each image column of the binning box (-1 outside).
-    column_bins: Vec<i32>,
-    /// Scratch: per bin, occupied bins among itself and its left and right neighbours.
-    row_counts: Vec<u8>,
-    /// Contrast maximisation: the window's events lifted to 3D.
-    lifted: Vec<contrast::LiftedEvent>,
-    /// Contrast maximisation scratch: the image of warped events on the ROI grid.
-    warped: Vec<f32>,
-    /// Contour points' inside and outside probe bins of the shift search (ROI grid).
-    probes: Vec<[[i32; 2]; 4]>,
-    /// Shift search scratch: the probes as indices into [`Self::padded`].
-    probe_index: Vec<[usize; 4]>,
-    /// Shift search scratch: the kept bins (1, else 0) inside a border of zeros wide enough that every shifted
-    /// probe reads inside it.
-    padded: Vec<u8>,
-    /// Shift search scratch: the coarse grid's scores and shifts (ROI bins).
-    shift_scores: Vec<(i64, i64, i64)>,
-    /// Contour points projected at the association pose, full-image pixels (NaN behind the camera).
-    projected: Vec<[f64; 2]>,
+    bins: EventBins,
     /// Per contour point, how far (full-image pixels, along its outward normal) the predicted motion swept it
     /// during the event window: positive on leading edges, negative on trailing edges.
     sweep: Vec<f64>,
-    roi: Option<Roi>,
-    stats: EventTermStats,
-    /// The window [`Self::bin_ahead`] binned, until [`Self::collect`] or [`Self::take_prebinned`].
-    prebinned: Option<BinnedWindow>,
+    hinge: HingeMatches,
+    lines: LineMatches,
+    search: ShiftSearch,
+    contrast: ContrastMax,
+    /// Residuals active in the latest accumulation.
+    active: usize,
 }
 
 impl EventEdges {
     /// Statistics of the last collection / accumulation.
     pub fn stats(&self) -> EventTermStats {
-        self.stats
+        EventTermStats {
+            bins: self.bins.kept_bins,
+            outside: self.bins.outside,
+            active: self.active,
+        }
+    }
+
+    /// Bins the events of `surface` in `window` ahead of [`Self::collect`] (which reuses them if its call names the
+    /// same window, and bins again otherwise): the part of the gathering that needs no render.
+    pub fn bin_ahead(&mut self, surface: &EventSurface, window: BinnedWindow) {
+        self.bins.bin_ahead(surface, window);
+    }
+
+    /// Forgets a binning made by [`Self::bin_ahead`] and returns its window, if any: the next
+    /// [`Self::collect`] bins afresh unless given it back.
+    pub fn take_prebinned(&mut self) -> Option<BinnedWindow> {
+        self.bins.take_prebinned()
+    }
+
+    /// Bins the events of `surface` newer than `t_us - window_us` inside `roi` (the render's ROI; `mask` and
+    /// `depth` are the render's mask and depth on the same grid, `id` the object's label) and keeps the candidates
+    /// outside the silhouette. Events on another object's silhouette where it is nearer than `occluder_z` (metres,
+    /// typically this object's centre depth) are that occluder's and are dropped; events on an object behind are
+    /// kept, since this object's own leading edge sweeps over it. `prebinned` is the window a
+    /// [`Self::bin_ahead`] binned (from [`Self::take_prebinned`]): if it is this one, its bins are used.
+    #[allow(clippy::too_many_arguments)]
+    pub fn collect(
+        &mut self,
+        term: &EventTerm,
+        surface: &EventSurface,
+        roi: &Roi,
+        mask: &[u16],
+        depth: &[f32],
+        occluder_z: f32,
+        id: u16,
+        t_us: i64,
+        window_us: i64,
+        max_candidates: usize,
+        prebinned: Option<BinnedWindow>,
+    ) {
+        self.hinge.reserve(max_candidates);
+        self.active = 0;
+        self.bins.collect(
+            term,
+            surface,
+            roi,
+            mask,
+            depth,
+            occluder_z,
+            id,
+            t_us,
+            window_us,
+            max_candidates,
+            prebinned,
+        );
     }
 
     /// Matches the events to `view`'s contour at `pose` as the term's kind needs: the outline step on each
@@ -216,12 +130,9 @@ impl EventEdges {
         motion: &Vector6<f64>,
         window_s: f64,
     ) {
-        self.association.clear();
-        self.contour_match.clear();
         self.sweep.clear();
-        self.contour_match.reserve(view.contour.capacity());
         self.sweep.reserve(view.contour.capacity());
-        let c = pose * nalgebra::Point3::from(*center_obj);
+        let c = pose * Point3::from(*center_obj);
         let v = Vector3::new(motion[0], motion[1], motion[2]);
         let w = Vector3::new(motion[3], motion[4], motion[5]);
         for cp in &view.contour {
@@ -237,16 +148,16 @@ impl EventEdges {
             self.sweep
                 .push((cp.normal_2d[0] * du + cp.normal_2d[1] * dv) * window_s);
         }
-        self.line_match.clear();
-        if term.kind == EventTermKind::ContrastMax {
+        self.lines.clear();
+        match term.kind {
             // No residuals: the motion comes from `maximise_contrast`.
-            return;
+            EventTermKind::ContrastMax => {}
+            EventTermKind::Lines => {
+                self.lines
+                    .find_steps(&self.bins, &self.sweep, term, view, pose, camera);
+            }
+            EventTermKind::Hinge => self.hinge.associate(&self.bins, term, view, pose, camera),
         }
-        if term.kind == EventTermKind::Lines {
-            self.find_steps(term, view, pose, camera);
-            return;
-        }
-        self.associate_hinge(term, view, pose, camera);
     }
 
     /// Accumulates the event residuals of the term's kind at `pose` into `ne` (camera: the full event camera):
@@ -261,17 +172,24 @@ impl EventEdges {
         camera: &PinholeCamera,
         ne: &mut NormalEquations,
     ) -> usize {
-        match term.kind {
+        self.active = match term.kind {
             EventTermKind::Lines => {
-                return self.accumulate_lines(term, view, pose, center_obj, camera, ne);
+                self.lines
+                    .accumulate(&self.sweep, term, view, pose, center_obj, camera, ne)
             }
-            EventTermKind::ContrastMax => {
-                self.stats.active = 0;
-                return 0;
-            }
-            EventTermKind::Hinge => {}
-        }
-        self.accumulate_hinge(term, view, pose, center_obj, camera, ne)
+            EventTermKind::ContrastMax => 0,
+            EventTermKind::Hinge => self.hinge.accumulate(
+                &self.bins,
+                &self.sweep,
+                term,
+                view,
+                pose,
+                center_obj,
+                camera,
+                ne,
+            ),
+        };
+        self.active
     }
 
     /// Fraction of `view`'s contour points at `pose` that have a kept event bin within two bins (event support of
@@ -282,52 +200,133 @@ impl EventEdges {
         pose: &Isometry3<f64>,
         camera: &PinholeCamera,
     ) -> Option<f64> {
-        let roi = self.roi?;
-        if view.contour.is_empty() {
-            return None;
-        }
-        let sx = f64::from(self.width) / roi.width;
-        let sy = f64::from(self.height) / roi.height;
-        let (wi, hi) = (i64::from(self.width), i64::from(self.height));
-        let mut supported = 0usize;
-        for cp in &view.contour {
-            let p = pose * cp.position;
-            let Some(uv) = camera.project(&p) else {
-                continue;
-            };
-            let i = ((uv.x + 0.5 - roi.x) * sx) as i64;
-            let j = ((uv.y + 0.5 - roi.y) * sy) as i64;
-            let mut hit = false;
-            'search: for dj in -2..=2 {
-                for di in -2..=2 {
-                    let (a, b) = (i + di, j + dj);
-                    if a >= 0 && b >= 0 && a < wi && b < hi && self.kept[(b * wi + a) as usize] {
-                        hit = true;
-                        break 'search;
-                    }
-                }
-            }
-            supported += usize::from(hit);
-        }
-        Some(supported as f64 / view.contour.len() as f64)
+        self.bins.contour_support(view, pose, camera)
+    }
+
+    /// Searches image shifts of `view`'s outline at `pose` (within the term's search range) for the one whose
+    /// contour points best separate events inside from no events outside, up to `range_px` (full-image pixels).
+    /// `motion_dir` is the unit image direction the object is predicted to move in, if known: near-best shifts
+    /// are then told apart by how far they move the outline across it
+    /// ([`EventTerm::search_aperture_tolerance`]). Returns the shift in full-image pixels if it beats the
+    /// unshifted outline clearly, else `None`.
+    pub fn search_shift(
+        &mut self,
+        term: &EventTerm,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        camera: &PinholeCamera,
+        range_px: f64,
+        motion_dir: Option<[f64; 2]>,
+    ) -> Option<[f64; 2]> {
+        self.search
+            .search(&self.bins, term, view, pose, camera, range_px, motion_dir)
+    }
+
+    /// Lifts the kept events of the last [`Self::collect`] to 3D: each pixel's latest event in the window at the
+    /// depth the render (`depth`, `mask` on the ROI grid, object `id`) has at its bin, or at `center_z` where the
+    /// render shows no object. At most `max_events`, evenly strided.
+    #[allow(clippy::too_many_arguments)]
+    pub fn lift_events(
+        &mut self,
+        surface: &EventSurface,
+        camera: &PinholeCamera,
+        depth: &[f32],
+        mask: &[u16],
+        id: u16,
+        t_us: i64,
+        window_us: i64,
+        center_z: f64,
+        max_events: usize,
+    ) {
+        self.contrast.lift_events(
+            &self.bins, surface, camera, depth, mask, id, t_us, window_us, center_z, max_events,
+        );
+    }
+
+    /// The object velocity (centre m/s, angular rad/s, camera frame, about `center`) that maximises the contrast
+    /// of the lifted events, found by a pattern search from `start` (steps halve `rounds` times). Returns `start`
+    /// when there are no events.
+    pub fn maximise_contrast(
+        &mut self,
+        camera: &PinholeCamera,
+        center: &Point3<f64>,
+        start: &Vector6<f64>,
+        step_translation: f64,
+        step_rotation: f64,
+        rounds: u32,
+    ) -> Vector6<f64> {
+        self.contrast.maximise_contrast(
+            &self.bins,
+            camera,
+            center,
+            start,
+            step_translation,
+            step_rotation,
+            rounds,
+        )
+    }
+
+    /// Events lifted by the last [`Self::lift_events`].
+    pub fn lifted_events(&self) -> usize {
+        self.contrast.lifted_events()
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::grid_index;
-    use proptest::prelude::*;
+/// The event term as a [`Modality`] for one refinement: the outline against the events of the tick's window,
+/// binned in [`EventEdges`], seen by the full event `camera`.
+#[derive(Debug)]
+pub struct EventModality<'a> {
+    /// Whether it takes part in this refinement.
+    pub active: bool,
+    /// Parameters.
+    pub term: &'a EventTerm,
+    /// The binned events, matches and scratch.
+    pub edges: &'a mut EventEdges,
+    /// The full event camera.
+    pub camera: &'a PinholeCamera,
+    /// The object's predicted velocity (centre m/s, angular rad/s, camera frame) about `center_obj`.
+    pub motion: &'a Vector6<f64>,
+    /// The object's centre, object frame (the velocity's pivot).
+    pub center_obj: &'a Vector3<f64>,
+    /// The event window, seconds.
+    pub window_s: f64,
+    /// Scale of the term in the sum.
+    pub weight: f64,
+}
 
-    proptest! {
-        #[test]
-        fn grid_index_is_the_nearest_index_or_negative(x in -1e6f64..1e6) {
-            let nearest = (x + 0.5).floor() as i64;
-            let g = grid_index(x);
-            if nearest >= 0 {
-                prop_assert_eq!(g, nearest);
-            } else {
-                prop_assert!(g < 0);
-            }
-        }
+impl Modality for EventModality<'_> {
+    fn name(&self) -> &'static str {
+        "events"
+    }
+
+    fn is_active(&self) -> bool {
+        self.active
+    }
+
+    fn weight(&self) -> f64 {
+        self.weight
+    }
+
+    fn correspond(&mut self, view: &ModelView, pose: &Isometry3<f64>) {
+        self.edges.associate(
+            self.term,
+            view,
+            pose,
+            self.center_obj,
+            self.camera,
+            self.motion,
+            self.window_s,
+        );
+    }
+
+    fn accumulate(
+        &mut self,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        center_obj: &Vector3<f64>,
+        ne: &mut NormalEquations,
+    ) {
+        self.edges
+            .accumulate(self.term, view, pose, center_obj, self.camera, ne);
     }
 }

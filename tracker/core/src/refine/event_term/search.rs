@@ -1,20 +1,36 @@
-//! The outline shift search of [`EventEdges`]: a coarse-to-fine search over image shifts of the whole outline,
-//! which reaches motions larger than the residuals' range.
+//! The outline shift search: a coarse-to-fine search over image shifts of the whole outline, which reaches
+//! motions larger than the residuals' range.
 
-use super::{EventEdges, EventTerm};
+use super::bins::EventBins;
+use super::term::EventTerm;
 use crate::refine::ModelView;
 use nalgebra::Isometry3;
 use scene::geometry::PinholeCamera;
 
-impl EventEdges {
+/// The shift search's buffers, reused from tick to tick.
+#[derive(Debug, Clone, Default)]
+pub(super) struct ShiftSearch {
+    /// Contour points' inside and outside probe bins of the shift search (ROI grid).
+    probes: Vec<[[i32; 2]; 4]>,
+    /// The probes as indices into [`Self::padded`].
+    probe_index: Vec<[usize; 4]>,
+    /// The kept bins (1, else 0) inside a border of zeros wide enough that every shifted probe reads inside it.
+    padded: Vec<u8>,
+    /// The coarse grid's scores and shifts (ROI bins).
+    shift_scores: Vec<(i64, i64, i64)>,
+}
+
+impl ShiftSearch {
     /// Searches image shifts of `view`'s outline at `pose` (within the term's search range) for the one whose
     /// contour points best separate events inside from no events outside, up to `range_px` (full-image pixels).
     /// `motion_dir` is the unit image direction the object is predicted to move in, if known: near-best shifts
     /// are then told apart by how far they move the outline across it
     /// ([`EventTerm::search_aperture_tolerance`]). Returns the shift in full-image pixels if it beats the
     /// unshifted outline clearly, else `None`.
-    pub fn search_shift(
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn search(
         &mut self,
+        bins: &EventBins,
         term: &EventTerm,
         view: &ModelView,
         pose: &Isometry3<f64>,
@@ -22,13 +38,13 @@ impl EventEdges {
         range_px: f64,
         motion_dir: Option<[f64; 2]>,
     ) -> Option<[f64; 2]> {
-        let roi = self.roi?;
-        if range_px <= 0.0 || view.contour.is_empty() || self.width == 0 || self.height == 0 {
+        let roi = bins.roi?;
+        if range_px <= 0.0 || view.contour.is_empty() || bins.width == 0 || bins.height == 0 {
             return None;
         }
-        let sx = f64::from(self.width) / roi.width;
-        let sy = f64::from(self.height) / roi.height;
-        let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+        let sx = f64::from(bins.width) / roi.width;
+        let sy = f64::from(bins.height) / roi.height;
+        let (wi, hi) = (i64::from(bins.width), i64::from(bins.height));
         // Contour points on the ROI grid with their inside / outside probe offsets (two bins each way).
         self.probes.clear();
         self.probes.reserve(view.contour.capacity());
@@ -66,7 +82,7 @@ impl EventEdges {
         let (wp, hp) = (wi + 2 * pad, hi + 2 * pad);
         self.padded.clear();
         self.padded.resize((wp * hp) as usize, 0);
-        for (src, dst) in self
+        for (src, dst) in bins
             .kept
             .chunks_exact(wi as usize)
             .zip(self.padded[(pad * wp) as usize..].chunks_exact_mut(wp as usize))

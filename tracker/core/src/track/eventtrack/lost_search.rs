@@ -114,19 +114,19 @@ impl EventTrack6d {
         r.frame = Some((self.depth.index, exposed_us));
         let at_frame = |o: &ObjectTrack| {
             if exposed_us < t_us {
-                o.history().at(exposed_us)
+                o.state.history.at(exposed_us)
             } else {
-                Some(o.predicted)
+                Some(o.state.predicted)
             }
         };
         for (s, o) in r.scene.iter_mut().zip(&self.objects) {
-            s.pose = at_frame(o).unwrap_or(o.predicted);
+            s.pose = at_frame(o).unwrap_or(o.state.predicted);
         }
         let mut foreground_ready = false;
         for k in 0..self.objects.len() {
             let o = &self.objects[k];
             r.searches[k] = Search::default();
-            if !o.needs_search(&self.config.quality) || t_us < o.t_us {
+            if !o.state.needs_search(&self.config.quality) || t_us < o.state.t_us {
                 continue;
             }
             let Some(here) = at_frame(o) else {
@@ -147,9 +147,9 @@ impl EventTrack6d {
             r.centres.clear();
             cluster_centres(
                 &r.foreground,
-                0.5 * o.diameter,
+                0.5 * o.model.diameter,
                 // The visible surface lies in front of the centre by about half the thinnest extent.
-                0.5 * (o.aabb_max - o.aabb_min).min(),
+                0.5 * (o.model.aabb_max - o.model.aabb_min).min(),
                 cfg.candidates,
                 &mut r.seeds,
                 &mut r.centres,
@@ -157,9 +157,9 @@ impl EventTrack6d {
             if r.centres.is_empty() {
                 continue;
             }
-            let here_centre = o.center_at(&here);
+            let here_centre = o.model.center_at(&here);
             // Samples the object's two largest box extents cover at 1 m.
-            let size = o.aabb_max - o.aabb_min;
+            let size = o.model.aabb_max - o.model.aabb_min;
             // The object's longest box axis, object frame.
             let long_axis = Vector3::ith_axis(size.imax()).into_inner();
             let mut extent = size.data.0[0];
@@ -176,7 +176,7 @@ impl EventTrack6d {
             });
             for cluster in &r.centres {
                 let centre = cluster.centre;
-                if (centre - here_centre).norm() < 0.25 * o.diameter
+                if (centre - here_centre).norm() < 0.25 * o.model.diameter
                     || (cluster.support as f64)
                         < (min_support / (centre.z * centre.z).max(1e-6)).max(8.0)
                 {
@@ -197,7 +197,7 @@ impl EventTrack6d {
                     r.pending.push_back(PendingPlace {
                         object: k,
                         start: Isometry3::from_parts(
-                            Translation3::from(centre.coords - rotation * o.center_obj),
+                            Translation3::from(centre.coords - rotation * o.model.center_obj),
                             rotation,
                         ),
                         estimated: false,
@@ -236,7 +236,7 @@ impl EventTrack6d {
             let Some(place) = r.pending.pop_front() else {
                 break;
             };
-            if self.objects[place.object].state == TrackingState::Tracking {
+            if self.objects[place.object].state.tracking == TrackingState::Tracking {
                 r.searches[place.object].remaining -= 1;
                 continue;
             }
@@ -289,7 +289,7 @@ impl EventTrack6d {
             {
                 let o = &mut self.objects[k];
                 o.relocate_on(&self.depth, &self.rig.depth, pose, frame_t_us, &self.config);
-                self.scene[k].pose = o.predicted;
+                self.scene[k].pose = o.state.predicted;
             }
         }
     }

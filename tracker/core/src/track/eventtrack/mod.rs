@@ -221,12 +221,15 @@ impl EventTrack6d {
             .normals_on_surface_grid(self.config.max_surface_points);
         let camera = &self.rig.event_camera;
         for (o, name) in self.objects.iter_mut().zip(&self.names) {
-            let first = o.pose;
-            let Some(roi) = o.roi_at(&first, camera, &self.config, o.t_us, false) else {
+            let first = o.state.pose;
+            let Some(roi) =
+                o.state
+                    .roi_at(&o.model, &first, camera, &self.config, o.state.t_us, false)
+            else {
                 continue;
             };
             self.renderer
-                .render_roi(&scene, camera, &roi, &mut o.target)
+                .render_roi(&scene, camera, &roi, &mut o.scratch.target)
                 .map_err(|source| TrackError::Render {
                     object: name.clone(),
                     source,
@@ -247,9 +250,13 @@ impl EventTrack6d {
             .chain(&self.workers)
             .map(|r| r.prefetch_counts());
         TrackerCounters {
-            depth_fallbacks: self.objects.iter().map(|o| o.fallbacks).sum(),
-            redetections: self.objects.iter().map(|o| o.redetections).sum(),
-            late_depth_unplaced: self.objects.iter().map(|o| o.late_depth_unplaced).sum(),
+            depth_fallbacks: self.objects.iter().map(|o| o.state.fallbacks).sum(),
+            redetections: self.objects.iter().map(|o| o.state.redetections).sum(),
+            late_depth_unplaced: self
+                .objects
+                .iter()
+                .map(|o| o.state.late_depth_unplaced)
+                .sum(),
             renders_prefetched: prefetch.clone().map(|p| p.started).sum(),
             prefetched_renders_used: prefetch.map(|p| p.used).sum(),
             ..self.counters
@@ -261,8 +268,8 @@ impl EventTrack6d {
     /// reported here: the next tick renders again and counts the error then.
     fn prefetch_next(&mut self, next_t_us: i64) {
         for (s, o) in self.scene.iter_mut().zip(&self.objects) {
-            let step = (next_t_us - o.t_us) as f64 * 1e-6;
-            s.pose = o.prediction(step.max(0.0), &self.config);
+            let step = (next_t_us - o.state.t_us) as f64 * 1e-6;
+            s.pose = o.state.prediction(&o.model, step.max(0.0), &self.config);
         }
         let scene = Scene::objects(&self.scene)
             .geometry_only()
@@ -278,10 +285,13 @@ impl EventTrack6d {
             .zip(renderers)
         {
             for (o, s) in objects.iter().zip(poses) {
-                if next_t_us < o.t_us {
+                if next_t_us < o.state.t_us {
                     continue;
                 }
-                if let Some(roi) = o.roi_at(&s.pose, camera, &self.config, next_t_us, false) {
+                if let Some(roi) =
+                    o.state
+                        .roi_at(&o.model, &s.pose, camera, &self.config, next_t_us, false)
+                {
                     let _ = renderer.prefetch_roi(&scene, camera, &roi);
                 }
             }
@@ -306,7 +316,7 @@ impl EventTrack6d {
 
     /// Object-frame axis-aligned box centre of object `k`, metres (the point refinement rotates about).
     pub fn object_center(&self, k: usize) -> Option<Vector3<f64>> {
-        self.objects.get(k).map(|o| o.center_obj)
+        self.objects.get(k).map(|o| o.model.center_obj)
     }
 
     /// Replaces object `k`'s latest estimate with `pose` at `t_us` (a re-initialisation from an external detector
@@ -317,7 +327,7 @@ impl EventTrack6d {
             && pose.rotation.coords.iter().all(|v| v.is_finite());
         match self.objects.get_mut(k) {
             Some(o) if finite => {
-                o.reset(t_us, pose);
+                o.state.reset(t_us, pose);
                 self.prepared = false;
                 true
             }
@@ -436,7 +446,7 @@ impl PoseTracker for EventTrack6d {
         out.extend(
             self.objects
                 .iter()
-                .filter_map(|o| o.fallback_check)
+                .filter_map(|o| o.state.fallback_check)
                 .filter(|c| Some(c.tick_us) == latest),
         );
     }
@@ -444,26 +454,26 @@ impl PoseTracker for EventTrack6d {
     fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
         let o = self.objects.get(object)?;
         self.last_tick_us?;
-        let pose = match o.previous {
+        let pose = match o.state.previous {
             // Within the recent estimates: interpolated between the two ticks either side.
-            _ if let Some(p) = o.history().at(t_us) => p,
-            Some((t0, p0)) if o.t_us > t0 => {
-                let s = (t_us - t0) as f64 / (o.t_us - t0) as f64;
+            _ if let Some(p) = o.state.history.at(t_us) => p,
+            Some((t0, p0)) if o.state.t_us > t0 => {
+                let s = (t_us - t0) as f64 / (o.state.t_us - t0) as f64;
                 // Interpolate, or extrapolate at most one tick period past the latest estimate.
-                let limit = 1.0 + 8_333.0 / (o.t_us - t0) as f64;
-                se3::interpolate(&p0, &o.pose, s.clamp(0.0, limit))
+                let limit = 1.0 + 8_333.0 / (o.state.t_us - t0) as f64;
+                se3::interpolate(&p0, &o.state.pose, s.clamp(0.0, limit))
             }
-            _ => o.pose,
+            _ => o.state.pose,
         };
-        let state = match o.reported.get() {
-            TrackingState::Tracking if t_us > o.t_us + 8_333 => TrackingState::Degraded,
+        let state = match o.state.reported.get() {
+            TrackingState::Tracking if t_us > o.state.t_us + 8_333 => TrackingState::Degraded,
             reported => reported,
         };
         Some(PoseEstimate {
             object,
             t_us,
             pose,
-            quality: o.quality,
+            quality: o.state.quality,
             state,
         })
     }

@@ -84,10 +84,16 @@ impl PlaceCheck<'_> {
         let k = place.object;
         let probe = set.probes.get_mut(k)?;
         probe.follow(self.objects.get(k)?);
-        probe.predicted = place.start;
+        probe.state.predicted = place.start;
         set.scene.copy_from_slice(self.scene);
         set.scene[k].pose = place.start;
-        let roi = probe.update_roi(self.camera, self.config, self.inputs.t_us, false)?;
+        let roi = probe.state.update_roi(
+            &probe.model,
+            self.camera,
+            self.config,
+            self.inputs.t_us,
+            false,
+        )?;
         let max_surface = self.config.max_surface_points;
         let mut render = |scene: &[SceneObject], target: &mut RenderTarget| {
             let scene = Scene::objects(scene)
@@ -99,13 +105,13 @@ impl PlaceCheck<'_> {
             *errors += u64::from(!ok);
             ok
         };
-        if !render(&set.scene, &mut probe.target) {
+        if !render(&set.scene, &mut probe.scratch.target) {
             return None;
         }
         let (fit, pose) = probe.probe_depth(&self.inputs, self.config)?;
         // Ranked by the silhouette at the refined pose, in the same ROI.
         set.scene[k].pose = pose;
-        if !render(&set.scene, &mut probe.target) {
+        if !render(&set.scene, &mut probe.scratch.target) {
             return None;
         }
         // Both directions: model points the depth confirms, and depth at the object's range the model explains (a

@@ -13,7 +13,7 @@
 use super::EventTrack6d;
 use crate::recon::SurfaceLog;
 use crate::track::PoseTracker;
-use crate::track::object::ObjectSnapshot;
+use crate::track::object::ObjectState;
 use crate::track::{DepthFallbackCheck, PoseEstimate};
 use drivers::timeline::Tick;
 use scene::render::SceneObject;
@@ -39,7 +39,7 @@ const SAME_TICK_US: i64 = 4_200;
 #[derive(Debug)]
 struct ExposureState {
     tick: Tick,
-    objects: Vec<ObjectSnapshot>,
+    objects: Vec<ObjectState>,
     scene: Vec<SceneObject>,
     last_tick_us: Option<i64>,
     /// Position of the event log then (the events pushed before the tick).
@@ -224,7 +224,7 @@ impl EventTrack6d {
         if tick.depth_frame.is_some() && !frame_here && max_age_us > 0 {
             let mut state = retrack.spare.pop().unwrap_or_else(|| ExposureState {
                 tick: *tick,
-                objects: self.objects.iter().map(ObjectSnapshot::of).collect(),
+                objects: self.objects.iter().map(|o| o.state.clone()).collect(),
                 scene: Vec::with_capacity(self.scene.len()),
                 last_tick_us: None,
                 events_before: 0,
@@ -248,7 +248,7 @@ impl EventTrack6d {
     fn save_state(&self, tick: &Tick, state: &mut ExposureState) {
         state.tick = *tick;
         for (o, s) in self.objects.iter().zip(&mut state.objects) {
-            o.save(s);
+            s.clone_from(&o.state);
         }
         state.scene.clone_from(&self.scene);
         state.last_tick_us = self.last_tick_us;
@@ -288,7 +288,7 @@ impl EventTrack6d {
         {
             let state = &retrack.states[k];
             for (o, s) in self.objects.iter_mut().zip(&state.objects) {
-                o.restore(s);
+                o.state.clone_from(s);
             }
             self.scene.clone_from(&state.scene);
             self.last_tick_us = state.last_tick_us;
@@ -315,7 +315,7 @@ impl EventTrack6d {
             checks.extend(
                 self.objects
                     .iter()
-                    .filter_map(|o| o.fallback_check)
+                    .filter_map(|o| o.state.fallback_check)
                     .filter(|c| c.tick_us == tick.t_us)
                     .map(|c| DepthFallbackCheck {
                         tick_us: now_us,

@@ -28,28 +28,28 @@ impl ObjectStep<'_> {
         let mut errors = 0;
         let t_us = self.inputs.t_us;
         for o in objects {
-            if t_us < o.t_us {
+            if t_us < o.state.t_us {
                 continue;
             }
             let roi = if self.refines {
-                o.update_roi(self.camera, self.config, t_us, self.depth_now)
+                o.state
+                    .update_roi(&o.model, self.camera, self.config, t_us, self.depth_now)
             } else {
                 None
             };
             if !self.refines {
-                o.hold(t_us);
+                o.state.hold(t_us);
                 continue;
             }
             // Before the render is taken, so that a render still in flight overlaps it.
-            let depth = o.prepare_depth(&self.inputs, self.config);
-            o.prepare_events(&self.inputs, self.config);
+            let depth = o.prepare(&self.inputs, self.config);
             if let Some(roi) = roi
                 && renderer
-                    .render_roi(self.scene, self.camera, &roi, &mut o.target)
+                    .render_roi(self.scene, self.camera, &roi, &mut o.scratch.target)
                     .is_err()
             {
                 errors += 1;
-                o.roi = None;
+                o.state.roi = None;
             }
             o.refine(&self.inputs, self.config, depth);
         }
@@ -137,11 +137,11 @@ impl EventTrack6d {
         };
         let depth_now = exposed_us.is_some();
         for o in &mut self.objects {
-            let step = (t_us - o.t_us) as f64 * 1e-6;
-            o.predict(step.max(0.0), &self.config);
+            let step = (t_us - o.state.t_us) as f64 * 1e-6;
+            o.state.predict(&o.model, step.max(0.0), &self.config);
         }
         for (s, o) in self.scene.iter_mut().zip(&self.objects) {
-            s.pose = o.predicted;
+            s.pose = o.state.predicted;
         }
         let refines = self.refines(depth_now);
         if refines && self.config.redetect.enabled {
@@ -187,9 +187,9 @@ impl EventTrack6d {
         out.extend(self.objects.iter().enumerate().map(|(k, o)| PoseEstimate {
             object: k,
             t_us,
-            pose: o.pose,
-            quality: o.quality,
-            state: o.reported.get(),
+            pose: o.state.pose,
+            quality: o.state.quality,
+            state: o.state.reported.get(),
         }));
     }
 }

@@ -1,206 +1,191 @@
 //! Depth-only checks of a pose hypothesis against the latest depth image: the agreeing fraction of model points,
 //! a depth-only refinement, the re-detection probe and the silhouette agreement.
 
-use super::{ObjectTrack, TickInputs, add_prior};
-use crate::recon::{DepthImage, DepthRig};
-use crate::refine::{DepthTermStats, NormalEquations, StepBounds, apply_step, solve_step};
+use super::carried_depth::carry_depth_from;
+use super::inputs::TickInputs;
+use super::model::ObjectModel;
+use super::motion::anchored_extrapolation;
+use super::optimise::optimiser;
+use super::scratch::TickScratch;
+use super::state::ObjectState;
+use crate::recon::DepthImage;
+use crate::refine::{DepthModality, DepthTermStats, ModelView, apply_step};
 use crate::track::config::TrackerConfig;
 use crate::track::fallback_check::{FALLBACK_STARTS, FallbackStart};
-use drivers::recording::DepthFrame;
-use nalgebra::{Isometry3, Vector6};
+use nalgebra::Isometry3;
 use scene::geometry::PinholeCamera;
 
-impl ObjectTrack {
-    /// The depth term's counts for the model's visible points at `pose` against `self.depth_now`.
-    pub(super) fn depth_stats_at(
-        &self,
-        pose: &Isometry3<f64>,
-        roi_camera: &PinholeCamera,
-        config: &TrackerConfig,
-    ) -> DepthTermStats {
+/// The depth term's counts for the model's visible points at `pose` against `D_t` (`scratch.depth_now`).
+pub(super) fn depth_stats_at(
+    scratch: &TickScratch,
+    pose: &Isometry3<f64>,
+    roi_camera: &PinholeCamera,
+    config: &TrackerConfig,
+) -> DepthTermStats {
+    config
+        .depth_term
+        .stats(&scratch.view, pose, roi_camera, &scratch.depth_now)
+}
+
+/// How well this tick's depth frame confirms the motion from the previous depth frame's estimate to `pose`
+/// ([`crate::recon::MovingNeighbourhood::motion_agreement`]); `None` without a depth frame or kept surfaces.
+pub(super) fn motion_agreement_at(
+    state: &ObjectState,
+    pose: &Isometry3<f64>,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+) -> Option<f64> {
+    // The frame shows the object at its exposure: a late frame's is the hypothesis carried back there.
+    let at_exposure = match state.late_motion {
+        Some((_, motion)) => motion.inverse() * pose,
+        None => *pose,
+    };
+    motion_agreement_at_exposure(state, &at_exposure, inputs, config)
+}
+
+/// [`motion_agreement_at`] for `pose`, the object's pose at the depth frame's exposure.
+pub(super) fn motion_agreement_at_exposure(
+    state: &ObjectState,
+    pose: &Isometry3<f64>,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+) -> Option<f64> {
+    let frame = inputs.depth?;
+    if state.neighbourhood.is_empty() {
+        return None;
+    }
+    state.neighbourhood.motion_agreement(
+        pose,
+        frame,
+        inputs.depth_rig,
+        config.depth_term.occlusion_gap as f32,
+    )
+}
+
+/// Where the depth safety net's candidates for the pose at `t_us` start, in [`FallbackStart`] order: the pose
+/// `anchor` of the previous depth frame (exposed at `t_anchor`, microseconds) and, as configured, that pose
+/// carried on to `t_us` at the tracker's velocity and at the motion between the two depth frames before. None
+/// of them depends on what the events did since `t_anchor`.
+pub(super) fn fallback_starts(
+    model: &ObjectModel,
+    state: &ObjectState,
+    t_anchor: i64,
+    anchor: &Isometry3<f64>,
+    t_us: i64,
+    config: &TrackerConfig,
+) -> [Option<(FallbackStart, Isometry3<f64>)>; FALLBACK_STARTS] {
+    let span = (t_us - t_anchor).max(0) as f64 * 1e-6;
+    [
+        Some((FallbackStart::PreviousDepthPose, *anchor)),
+        config.depth_fallback_extrapolate.then(|| {
+            let start = apply_step(anchor, &model.center_obj, &(state.velocity * span));
+            (FallbackStart::Extrapolated, start)
+        }),
         config
-            .depth_term
-            .stats(&self.view, pose, roi_camera, &self.depth_now)
-    }
+            .depth_fallback_anchored
+            .then(|| anchored_extrapolation(model, state, t_us, config))
+            .flatten()
+            .map(|start| (FallbackStart::AnchoredMotion, start)),
+    ]
+}
 
-    /// At a fresh depth frame, keeps the previous frame's surfaces around the object that moved since (the carried
-    /// depth, before the new frame replaces it), for [`Self::motion_agreement_at`]; forgets them when there is no
-    /// previous frame to compare with or the check is off.
-    pub(super) fn capture_neighbourhood(
-        &mut self,
-        frame: &DepthFrame,
-        rig: &DepthRig,
-        config: &TrackerConfig,
-    ) {
-        match self.anchor {
-            Some((t_anchor, anchor))
-                if config.depth_fallback_motion_margin >= 0.0
-                    && self.carried.exposure_us() == Some(t_anchor) =>
-            {
-                self.neighbourhood
-                    .capture(&self.carried, &anchor, frame, rig);
-            }
-            _ => self.neighbourhood.clear(),
-        }
-    }
+/// Depth-only refinement from `start` against `D_t` (what `depth30` does at a depth frame): the refined pose and
+/// the depth term's counts there.
+pub(super) fn refine_on_depth(
+    model: &ObjectModel,
+    scratch: &TickScratch,
+    start: Isometry3<f64>,
+    roi_camera: &PinholeCamera,
+    config: &TrackerConfig,
+) -> (Isometry3<f64>, DepthTermStats) {
+    refine_on_depth_in(
+        model,
+        &scratch.view,
+        start,
+        roi_camera,
+        &scratch.depth_now,
+        config,
+    )
+}
 
-    /// How well this tick's depth frame confirms the motion from the previous depth frame's estimate to `pose`
-    /// ([`crate::recon::MovingNeighbourhood::motion_agreement`]); `None` without a depth frame or kept surfaces.
-    pub(super) fn motion_agreement_at(
-        &self,
-        pose: &Isometry3<f64>,
-        inputs: &TickInputs<'_>,
-        config: &TrackerConfig,
-    ) -> Option<f64> {
-        // The frame shows the object at its exposure: a late frame's is the hypothesis carried back there.
-        let at_exposure = match self.late_motion {
-            Some((_, motion)) => motion.inverse() * pose,
-            None => *pose,
-        };
-        self.motion_agreement_at_exposure(&at_exposure, inputs, config)
-    }
+/// [`refine_on_depth`] of `view` against `depth`, an image in `camera`.
+pub(super) fn refine_on_depth_in(
+    model: &ObjectModel,
+    view: &ModelView,
+    start: Isometry3<f64>,
+    camera: &PinholeCamera,
+    depth: &DepthImage,
+    config: &TrackerConfig,
+) -> (Isometry3<f64>, DepthTermStats) {
+    let mut modality = DepthModality {
+        active: true,
+        term: &config.depth_term,
+        camera,
+        depth,
+        weight: 1.0,
+        stats: None,
+    };
+    let pose =
+        optimiser(model, config, None).run(&mut [&mut modality], view, &model.center_obj, start);
+    let stats = config.depth_term.stats(view, &pose, camera, depth);
+    (pose, stats)
+}
 
-    /// [`Self::motion_agreement_at`] for `pose`, the object's pose at the depth frame's exposure.
-    pub(super) fn motion_agreement_at_exposure(
-        &self,
-        pose: &Isometry3<f64>,
-        inputs: &TickInputs<'_>,
-        config: &TrackerConfig,
-    ) -> Option<f64> {
-        let frame = inputs.depth?;
-        if self.neighbourhood.is_empty() {
-            return None;
-        }
-        self.neighbourhood.motion_agreement(
-            pose,
-            frame,
-            inputs.depth_rig,
-            config.depth_term.occlusion_gap as f32,
-        )
+/// Checks the hypothesis `state.predicted` against the fresh depth frame of `inputs` (re-detection): registers
+/// the frame around it and refines on depth only from it, using the render the caller made at it in
+/// `scratch.target`. Returns the agreeing fraction of the model points left in view ([`seen_agreement`]) and the
+/// refined pose; `None` without a depth frame, ROI or visible model.
+pub(super) fn probe_depth(
+    model: &ObjectModel,
+    state: &mut ObjectState,
+    scratch: &mut TickScratch,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+) -> Option<(f64, Isometry3<f64>)> {
+    let roi = state.roi?;
+    let frame = inputs.depth?;
+    let roi_camera = inputs.camera.crop(&roi);
+    let start = state.predicted;
+    scratch.view.extract(
+        &scratch.target,
+        &roi_camera,
+        model.label,
+        &start,
+        config.max_surface_points,
+        config.max_contour_points,
+    );
+    if scratch.view.surface.is_empty() {
+        return None;
     }
+    carry_depth_from(model, state, frame, inputs.depth_rig, inputs.t_us, config);
+    state
+        .carried
+        .render(&start, &roi_camera, &mut scratch.depth_now);
+    let (pose, stats) = refine_on_depth(model, scratch, start, &roi_camera, config);
+    Some((seen_agreement(&stats), pose))
+}
 
-    /// Where the depth safety net's candidates for the pose at `t_us` start, in [`FallbackStart`] order: the pose
-    /// `anchor` of the previous depth frame (exposed at `t_anchor`, microseconds) and, as configured, that pose
-    /// carried on to `t_us` at the tracker's velocity and at the motion between the two depth frames before. None
-    /// of them depends on what the events did since `t_anchor`.
-    pub(super) fn fallback_starts(
-        &self,
-        t_anchor: i64,
-        anchor: &Isometry3<f64>,
-        t_us: i64,
-        config: &TrackerConfig,
-    ) -> [Option<(FallbackStart, Isometry3<f64>)>; FALLBACK_STARTS] {
-        let span = (t_us - t_anchor).max(0) as f64 * 1e-6;
-        [
-            Some((FallbackStart::PreviousDepthPose, *anchor)),
-            config.depth_fallback_extrapolate.then(|| {
-                let start = apply_step(anchor, &self.center_obj, &(self.velocity * span));
-                (FallbackStart::Extrapolated, start)
-            }),
-            config
-                .depth_fallback_anchored
-                .then(|| self.anchored_extrapolation(t_us, config))
-                .flatten()
-                .map(|start| (FallbackStart::AnchoredMotion, start)),
-        ]
-    }
-
-    /// Depth-only refinement from `start` against `self.depth_now` (what `depth30` does at a depth frame): the
-    /// refined pose and the depth term's counts there.
-    pub(super) fn refine_on_depth(
-        &self,
-        start: Isometry3<f64>,
-        roi_camera: &PinholeCamera,
-        config: &TrackerConfig,
-    ) -> (Isometry3<f64>, DepthTermStats) {
-        self.refine_on_depth_in(start, roi_camera, &self.depth_now, config)
-    }
-
-    /// [`Self::refine_on_depth`] against `depth`, an image in `camera`.
-    pub(super) fn refine_on_depth_in(
-        &self,
-        start: Isometry3<f64>,
-        camera: &PinholeCamera,
-        depth: &DepthImage,
-        config: &TrackerConfig,
-    ) -> (Isometry3<f64>, DepthTermStats) {
-        let bounds = StepBounds {
-            max_rotation: config.max_step_rotation_deg.to_radians(),
-            max_translation: config.max_step_translation_diameters * self.diameter,
-        };
-        let prior_t = 1.0 / (config.prior_translation_m * config.prior_translation_m);
-        let prior_r = 1.0 / config.prior_rotation_rad().powi(2);
-        let mut pose = start;
-        let mut offset = Vector6::zeros();
-        for _ in 0..config.iterations {
-            let mut ne = NormalEquations::default();
-            config.depth_term.accumulate(
-                &self.view,
-                &pose,
-                &self.center_obj,
-                camera,
-                depth,
-                &mut ne,
-            );
-            add_prior(&mut ne, &offset, prior_t, prior_r);
-            let Some(step) = solve_step(&ne, config.damping, &bounds) else {
-                break;
-            };
-            offset += step;
-            pose = apply_step(&pose, &self.center_obj, &step);
-        }
-        let stats = config.depth_term.stats(&self.view, &pose, camera, depth);
-        (pose, stats)
-    }
-
-    /// Checks the hypothesis `self.predicted` against the fresh depth frame of `inputs` (re-detection): registers
-    /// the frame around it and refines on depth only from it, using the render the caller made at it in
-    /// `self.target`. Returns the agreeing fraction of the model points left in view ([`seen_agreement`]) and the
-    /// refined pose; `None` without a depth frame, ROI or visible model.
-    pub fn probe_depth(
-        &mut self,
-        inputs: &TickInputs<'_>,
-        config: &TrackerConfig,
-    ) -> Option<(f64, Isometry3<f64>)> {
-        let roi = self.roi?;
-        let frame = inputs.depth?;
-        let roi_camera = inputs.camera.crop(&roi);
-        let start = self.predicted;
-        self.view.extract(
-            &self.target,
-            &roi_camera,
-            self.label,
-            &start,
-            config.max_surface_points,
-            config.max_contour_points,
-        );
-        if self.view.surface.is_empty() {
-            return None;
-        }
-        self.carry_depth_from(frame, inputs.depth_rig, inputs.t_us, config);
-        self.carried
-            .render(&start, &roi_camera, &mut self.depth_now);
-        let (pose, stats) = self.refine_on_depth(start, &roi_camera, config);
-        Some((seen_agreement(&stats), pose))
-    }
-
-    /// How well the silhouette in `self.target` (rendered at `pose`) matches what the fresh depth image in
-    /// `self.depth_now` shows at the object's depth ([`silhouette_overlap`]). Re-detection ranks places by it:
-    /// unlike the agreeing fraction of model points, it stays low for a pose that shows only a small part of the
-    /// object where the depth sees all of it.
-    pub fn silhouette_agreement(&self, pose: &Isometry3<f64>, config: &TrackerConfig) -> f64 {
-        let c = self.center_at(pose);
-        let noise = config.depth_term;
-        silhouette_overlap(
-            &self.depth_now.z,
-            self.target.depth(),
-            self.target.mask(),
-            self.label,
-            c.z,
-            0.5 * self.diameter,
-            3.0 * (noise.sigma_0 + noise.sigma_z2 * c.z * c.z) + 0.005,
-        )
-    }
+/// How well the silhouette in `scratch.target` (rendered at `pose`) matches what the fresh depth image in
+/// `scratch.depth_now` shows at the object's depth ([`silhouette_overlap`]). Re-detection ranks places by it:
+/// unlike the agreeing fraction of model points, it stays low for a pose that shows only a small part of the
+/// object where the depth sees all of it.
+pub(super) fn silhouette_agreement(
+    model: &ObjectModel,
+    scratch: &TickScratch,
+    pose: &Isometry3<f64>,
+    config: &TrackerConfig,
+) -> f64 {
+    let c = model.center_at(pose);
+    let noise = config.depth_term;
+    silhouette_overlap(
+        &scratch.depth_now.z,
+        scratch.target.depth(),
+        scratch.target.mask(),
+        model.label,
+        c.z,
+        0.5 * model.diameter,
+        3.0 * (noise.sigma_0 + noise.sigma_z2 * c.z * c.z) + 0.005,
+    )
 }
 
 /// Below this fraction of its model points in view, a re-detection place is scored as if this fraction were in

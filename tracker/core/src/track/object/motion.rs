@@ -1,50 +1,34 @@
-//! The object's motion between estimates: what two poses say about it, and where a depth frame's estimate is
-//! carried to by the motion between depth frames.
+//! The object's motion between estimates: the velocity an estimate updates, where a depth frame's estimate is
+//! carried to by the motion between depth frames, and which way the object moves in the image.
 
-use super::ObjectTrack;
+use super::inputs::TickInputs;
+use super::model::ObjectModel;
+use super::state::{ObjectState, normalise};
 use crate::refine::apply_step;
 use crate::track::config::TrackerConfig;
-use nalgebra::{Isometry3, Vector6};
+use crate::track::estimate::TrackingState;
+use nalgebra::{Isometry3, Vector3, Vector6};
 
-impl ObjectTrack {
-    /// The previous depth frame's estimate carried on to `t_us` at the motion between the last two depth frames'
-    /// estimates (centre speed and angular speed capped like the velocity's, no spin about a continuous symmetry
-    /// axis): a start for the safety net that the events since the previous depth frame cannot have moved. `None`
-    /// before two depth frames, and after a re-detection until two more.
-    pub(super) fn anchored_extrapolation(
-        &self,
-        t_us: i64,
-        config: &TrackerConfig,
-    ) -> Option<Isometry3<f64>> {
-        let (t1, p1) = self.anchor?;
-        let (t0, p0) = self.anchor_before?;
-        let between = (t1 - t0) as f64 * 1e-6;
-        if between <= 0.0 {
-            return None;
-        }
-        let mut motion = self.observable_motion(&p0, &p1, between);
-        cap_motion(&mut motion, config);
-        let span = (t_us - t1).max(0) as f64 * 1e-6;
-        Some(apply_step(&p1, &self.center_obj, &(motion * span)))
+/// The previous depth frame's estimate carried on to `t_us` at the motion between the last two depth frames'
+/// estimates (centre speed and angular speed capped like the velocity's, no spin about a continuous symmetry
+/// axis): a start for the safety net that the events since the previous depth frame cannot have moved. `None`
+/// before two depth frames, and after a re-detection until two more.
+pub(super) fn anchored_extrapolation(
+    model: &ObjectModel,
+    state: &ObjectState,
+    t_us: i64,
+    config: &TrackerConfig,
+) -> Option<Isometry3<f64>> {
+    let (t1, p1) = state.anchor?;
+    let (t0, p0) = state.anchor_before?;
+    let between = (t1 - t0) as f64 * 1e-6;
+    if between <= 0.0 {
+        return None;
     }
-
-    /// The velocity that carries `from` to `to` in `span_s` seconds (centre m/s, angular rad/s, camera frame),
-    /// without the spin about any continuous symmetry axis: that rotation leaves the shape unchanged, so what the
-    /// refinement reports about it is noise, and feeding it back would spin the prediction.
-    pub(super) fn observable_motion(
-        &self,
-        from: &Isometry3<f64>,
-        to: &Isometry3<f64>,
-        span_s: f64,
-    ) -> Vector6<f64> {
-        let v = (self.center_at(to) - self.center_at(from)) / span_s;
-        let mut w = (to.rotation * from.rotation.inverse()).scaled_axis() / span_s;
-        for axis in &self.spin_axes {
-            let a = to.rotation * axis;
-            w -= a * a.dot(&w);
-        }
-        Vector6::new(v.x, v.y, v.z, w.x, w.y, w.z)
-    }
+    let mut motion = model.observable_motion(&p0, &p1, between);
+    cap_motion(&mut motion, config);
+    let span = (t_us - t1).max(0) as f64 * 1e-6;
+    Some(apply_step(&p1, &model.center_obj, &(motion * span)))
 }
 
 /// Scales a motion (centre m/s, angular rad/s) down to the speeds the motion model accepts
@@ -61,6 +45,82 @@ pub(super) fn cap_motion(v: &mut Vector6<f64>, config: &TrackerConfig) {
     }
 }
 
+/// Records `pose` as the estimate at this tick, after [`super::assess::assess`] set the state: the velocity,
+/// the depth anchors at a fresh depth frame, and the pose history.
+pub(super) fn record_estimate(
+    model: &ObjectModel,
+    state: &mut ObjectState,
+    inputs: &TickInputs<'_>,
+    pose: Isometry3<f64>,
+    fresh_depth: bool,
+    config: &TrackerConfig,
+) {
+    // Velocity: at a fresh depth frame from the motion since the previous one (anchored on depth, so a drift
+    // the motion model itself introduced between frames is not fed back); otherwise from the last tick,
+    // weighted less.
+    let (reference, span, a) = match (fresh_depth, state.anchor) {
+        (true, Some((t0, p0))) if inputs.t_us > t0 => (
+            p0,
+            (inputs.t_us - t0) as f64 * 1e-6,
+            config.velocity_smoothing_depth,
+        ),
+        _ => (state.pose, inputs.dt_s, config.velocity_smoothing),
+    };
+    if fresh_depth {
+        state.anchor_before = state.anchor;
+        // A late frame anchors the estimate carried back to its exposure, by the motion its points were
+        // carried by, so that anchors stay at exposures (the next frame's motion check compares frames).
+        state.anchor = Some(match state.late_motion {
+            Some((exposed_us, motion)) => (exposed_us, normalise(motion.inverse() * pose)),
+            None => (inputs.t_us, pose),
+        });
+    }
+    if span > 0.0 && state.tracking != TrackingState::Lost {
+        let measured = model.observable_motion(&reference, &pose, span);
+        let a = a.clamp(0.0, 1.0);
+        let mut v = a * measured + (1.0 - a) * state.velocity;
+        cap_motion(&mut v, config);
+        state.velocity = v;
+    } else if state.tracking == TrackingState::Lost {
+        state.velocity = Vector6::zeros();
+    }
+    if fresh_depth && let Some((exposed_us, _)) = state.late_motion {
+        // What the late frame changed at this tick, it changes since its exposure.
+        state
+            .history
+            .correct_since(exposed_us, &normalise(state.predicted.inverse() * pose));
+    }
+    state.previous = Some((state.t_us, state.pose));
+    state.pose = normalise(pose);
+    state.t_us = inputs.t_us;
+    state.history.push(state.t_us, state.pose);
+}
+
+/// Unit image direction (full-image pixels) the centre at `predicted` moves in at the estimated velocity,
+/// when it moves at least 2 px per tick and at least as far as turning moves the outline's ends;
+/// `None` otherwise, and before the third depth frame (the motion is not measured yet).
+pub(super) fn image_motion_direction(
+    model: &ObjectModel,
+    state: &ObjectState,
+    predicted: &Isometry3<f64>,
+    inputs: &TickInputs<'_>,
+) -> Option<[f64; 2]> {
+    if state.depth_frames_used < 2 {
+        return None;
+    }
+    let c = model.center_at(predicted);
+    let v = Vector3::new(state.velocity[0], state.velocity[1], state.velocity[2]);
+    let a = inputs.camera.project(&c)?;
+    let b = inputs.camera.project(&(c + v * inputs.dt_s))?;
+    let d = [b.x - a.x, b.y - a.y];
+    let n = d[0].hypot(d[1]);
+    // Turning moves the outline's ends in other directions than the centre: only a mostly sliding outline
+    // has one direction of motion.
+    let w = Vector3::new(state.velocity[3], state.velocity[4], state.velocity[5]).norm();
+    let turning = inputs.camera.fx * w * model.diameter * 0.5 / c.z.max(0.05) * inputs.dt_s;
+    (n >= 2.0 && n >= turning).then(|| [d[0] / n, d[1] / n])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -69,7 +129,6 @@ mod tests {
 
     #[test]
     fn velocity_keeps_no_spin_about_a_continuous_symmetry_axis() {
-        let config = TrackerConfig::default();
         let half = Vector3::new(0.01, 0.01, 0.06);
         let tilted = Isometry3::from_parts(
             Translation3::new(0.0, 0.0, 0.6),
@@ -79,8 +138,8 @@ mod tests {
             axis: Vector3::z_axis(),
             offset: Point3::origin(),
         }];
-        let symmetric = ObjectTrack::new(1, 0.12, -half, half, tilted, 0, &marker, &config);
-        let plain = ObjectTrack::new(1, 0.12, -half, half, tilted, 0, &[], &config);
+        let symmetric = ObjectModel::new(1, 0.12, -half, half, &marker);
+        let plain = ObjectModel::new(1, 0.12, -half, half, &[]);
         let turned = |axis: Vector3<f64>, angle: f64| {
             let mut p = tilted;
             p.rotation *= UnitQuaternion::from_scaled_axis(axis * angle);
@@ -111,16 +170,17 @@ mod tests {
             )
         };
         let half = Vector3::new(0.05, 0.05, 0.05);
-        let mut track = ObjectTrack::new(1, 0.1, -half, half, at(0.0, 0.0), 0, &[], &config);
+        let model = ObjectModel::new(1, 0.1, -half, half, &[]);
+        let mut track = ObjectState::new(at(0.0, 0.0), 0, 0);
         // One depth frame is no motion yet.
         track.anchor = Some((0, at(0.0, 0.0)));
-        assert!(track.anchored_extrapolation(66_666, &config).is_none());
+        assert!(anchored_extrapolation(&model, &track, 66_666, &config).is_none());
         // 2 cm and 0.1 rad between frames 33.3 ms apart; the velocity the events updated since says otherwise and
         // is ignored.
         track.anchor_before = track.anchor;
         track.anchor = Some((33_333, at(0.02, 0.1)));
         track.velocity = Vector6::new(-5.0, 1.0, 0.0, 0.0, 9.0, 0.0);
-        let start = track.anchored_extrapolation(66_666, &config).unwrap();
+        let start = anchored_extrapolation(&model, &track, 66_666, &config).unwrap();
         assert!(
             (start.translation.vector - Vector3::new(0.04, 0.0, 0.6)).norm() < 1e-4,
             "{start:?}"
@@ -130,14 +190,14 @@ mod tests {
             "{start:?}"
         );
         // At the anchor's own time the start is the anchor.
-        let same = track.anchored_extrapolation(33_333, &config).unwrap();
+        let same = anchored_extrapolation(&model, &track, 33_333, &config).unwrap();
         assert!((same.translation.vector - Vector3::new(0.02, 0.0, 0.6)).norm() < 1e-9);
         // The speed is capped like the velocity's: at 0.3 m/s the 33.3 ms carry 1 cm, not 2.
         config.max_speed = 0.3;
-        let capped = track.anchored_extrapolation(66_666, &config).unwrap();
+        let capped = anchored_extrapolation(&model, &track, 66_666, &config).unwrap();
         assert!((capped.translation.x - 0.03).abs() < 1e-4, "{capped:?}");
         // A re-detection forgets both anchors.
         track.relocate(at(0.1, 0.0));
-        assert!(track.anchored_extrapolation(66_666, &config).is_none());
+        assert!(anchored_extrapolation(&model, &track, 66_666, &config).is_none());
     }
 }

@@ -1,85 +1,52 @@
-//! Where an object is put from outside its refinement: a place re-detection found, an external reset, and the
-//! estimate held between depth frames.
+//! Where re-detection puts an object: the place it found on a depth frame, carried to this tick, with that frame
+//! as the object's carried depth.
 
-use super::{ObjectTrack, in_front_or, normalise};
+use super::carried_depth::register_between;
+use super::model::ObjectModel;
+use super::state::{ObjectState, in_front_or, normalise};
 use crate::recon::DepthRig;
 use crate::track::config::TrackerConfig;
-use crate::track::estimate::{ReportedState, TrackingState};
 use drivers::recording::DepthFrame;
-use nalgebra::{Isometry3, Vector6};
+use nalgebra::Isometry3;
 
-impl ObjectTrack {
-    /// Moves the object to where re-detection found it on `frame`, exposed at `found_us`: `found` there, carried
-    /// to this tick by the motion estimated since the exposure (none when that is this tick). The
-    /// motion estimate and the depth anchor, which belong to the place it was lost at, are dropped; the next
-    /// refinement starts there. The pose history restarts at the exposure, so that the next frame, late too,
-    /// finds an estimate at its own exposure, and the frame becomes the depth `D_0` carried on.
-    pub fn relocate_on(
-        &mut self,
-        frame: &DepthFrame,
-        rig: &DepthRig,
-        found: Isometry3<f64>,
-        found_us: i64,
-        config: &TrackerConfig,
-    ) {
-        let motion = self
-            .history
-            .at(found_us)
-            .filter(|_| found_us < self.t_us)
-            .map(|then| self.predicted * then.inverse());
-        let now = in_front_or(motion.map_or(found, |m| m * found), found);
-        self.relocate(now);
-        self.history.push(found_us, normalise(found));
-        let now = self.predicted;
-        self.register_between(frame, rig, &found, &now, found_us, config);
-        if let Some(m) = motion {
-            self.carried
-                .carry_object_part(&found, &m, &self.aabb_min, &self.aabb_max, 0.01);
-        }
-        self.carried
-            .attach_to_object(&self.predicted, &self.aabb_min, &self.aabb_max, 0.01);
+/// Moves the object to where re-detection found it on `frame`, exposed at `found_us`: `found` there, carried
+/// to this tick by the motion estimated since the exposure (none when that is this tick). The
+/// motion estimate and the depth anchor, which belong to the place it was lost at, are dropped; the next
+/// refinement starts there. The pose history restarts at the exposure, so that the next frame, late too,
+/// finds an estimate at its own exposure, and the frame becomes the depth `D_0` carried on.
+pub(super) fn relocate_on(
+    model: &ObjectModel,
+    state: &mut ObjectState,
+    frame: &DepthFrame,
+    rig: &DepthRig,
+    found: Isometry3<f64>,
+    found_us: i64,
+    config: &TrackerConfig,
+) {
+    let motion = state
+        .history
+        .at(found_us)
+        .filter(|_| found_us < state.t_us)
+        .map(|then| state.predicted * then.inverse());
+    let now = in_front_or(motion.map_or(found, |m| m * found), found);
+    state.relocate(now);
+    state.history.push(found_us, normalise(found));
+    let now = state.predicted;
+    register_between(model, state, frame, rig, &found, &now, found_us, config);
+    if let Some(m) = motion {
+        state
+            .carried
+            .carry_object_part(&found, &m, &model.aabb_min, &model.aabb_max, 0.01);
     }
-
-    /// Moves the object to `pose`: the motion estimate, the depth anchor and the pose history are dropped.
-    pub(super) fn relocate(&mut self, pose: Isometry3<f64>) {
-        self.pose = normalise(pose);
-        self.predicted = self.pose;
-        self.velocity = Vector6::zeros();
-        self.anchor = None;
-        self.anchor_before = None;
-        self.low_ticks = 0;
-        self.recent_quality.clear();
-        self.history.clear();
-        self.redetections += 1;
-    }
-
-    /// Replaces the latest estimate (see [`super::EventTrack6d::reset_pose`]).
-    pub fn reset(&mut self, t_us: i64, pose: Isometry3<f64>) {
-        self.previous = Some((self.t_us, self.pose));
-        self.pose = normalise(pose);
-        self.predicted = self.pose;
-        self.t_us = t_us;
-        self.history.clear();
-        self.history.push(t_us, self.pose);
-        self.low_ticks = 0;
-        self.recent_quality.clear();
-        self.state = TrackingState::Tracking;
-        self.reported = ReportedState::new(TrackingState::Tracking);
-    }
-
-    /// Holds the latest estimate at `t_us` without refining (`depth30` between depth frames): pose, quality and
-    /// state stay what the last refinement said.
-    pub fn hold(&mut self, t_us: i64) {
-        self.previous = Some((self.t_us, self.pose));
-        self.t_us = t_us;
-        self.history.push(t_us, self.pose);
-    }
+    state
+        .carried
+        .attach_to_object(&state.predicted, &model.aabb_min, &model.aabb_max, 0.01);
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::{Translation3, UnitQuaternion, Vector3};
+    use nalgebra::{Translation3, UnitQuaternion, Vector3, Vector6};
     use scene::geometry::PinholeCamera;
 
     fn at_x(x: f64) -> Isometry3<f64> {
@@ -117,13 +84,14 @@ mod tests {
         let half = Vector3::new(0.06, 0.06, 0.01);
         // The estimate wandered off to the right: 10 cm at 10 ms, 14 cm at 40 ms (its latest), predicted 16 cm at
         // this tick. Re-detection finds the object straight ahead on the frame exposed at 20 ms.
-        let mut track = ObjectTrack::new(1, 0.12, -half, half, at_x(0.1), 10_000, &[], &config);
+        let model = ObjectModel::new(1, 0.12, -half, half, &[]);
+        let mut track = ObjectState::new(at_x(0.1), 10_000, 0);
         track.history.push(10_000, at_x(0.1));
         track.history.push(40_000, at_x(0.14));
         track.t_us = 40_000;
         track.predicted = at_x(0.16);
         track.velocity = Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0);
-        track.relocate_on(&frame, &rig, at_x(0.0), 20_000, &config);
+        relocate_on(&model, &mut track, &frame, &rig, at_x(0.0), 20_000, &config);
         // Carried on by the estimate's motion since the exposure (from 11.3 cm then to 16 cm now).
         let moved = 0.16 - (0.1 + 0.04 / 3.0);
         assert!(
@@ -148,10 +116,10 @@ mod tests {
         );
 
         // Found on the frame of this very tick: put there as found.
-        let mut track = ObjectTrack::new(1, 0.12, -half, half, at_x(0.1), 10_000, &[], &config);
+        let mut track = ObjectState::new(at_x(0.1), 10_000, 0);
         track.history.push(10_000, at_x(0.1));
         track.predicted = at_x(0.12);
-        track.relocate_on(&frame, &rig, at_x(0.0), 18_333, &config);
+        relocate_on(&model, &mut track, &frame, &rig, at_x(0.0), 18_333, &config);
         assert_eq!(track.pose, at_x(0.0));
         assert_eq!(track.history.at(18_333), Some(at_x(0.0)));
     }

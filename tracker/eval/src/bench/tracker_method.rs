@@ -1,8 +1,8 @@
 //! The tracker on a recording: building it from the recording's rig and models, and its benchmark methods
 //! (`eventtrack6d`, `depth30`, `events-only`) behind [`crate::bench::Method`].
 
-use crate::EvalError;
-use crate::bench::{Method, MethodInput};
+use super::method::{Method, MethodInput};
+use crate::sequence::EvalError;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -1,9 +1,14 @@
-//! Gathering the events of one ROI for [`EventEdges`]: binning the recent events on the ROI grid, removing
-//! isolated bins and events that belong to a nearer object, and keeping the candidates outside the silhouette.
-//! The binning reads only the events, so the tracker does it before it waits for the ROI render
-//! ([`EventEdges::bin_ahead`]); the rest needs the render's mask and depth.
+//! The events of one ROI on its grid ([`EventBins`]): binning the recent events, removing isolated bins and
+//! events that belong to a nearer object, and keeping the hinge's candidates outside the silhouette. The binning
+//! reads only the events, so the tracker does it before it waits for the ROI render ([`EventBins::bin_ahead`]);
+//! the rest needs the render's mask and depth.
 
-use super::*;
+use super::term::{EventTerm, EventTermKind};
+use crate::recon::EventSurface;
+use crate::refine::ModelView;
+use nalgebra::Isometry3;
+use scene::geometry::{PinholeCamera, Roi};
+use scene::render::MASK_EMPTY;
 
 /// Which events a binning holds: those of `roi` in the window `[t_us - window_us, t_us]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -16,7 +21,34 @@ pub struct BinnedWindow {
     pub roi: Roi,
 }
 
-impl EventEdges {
+/// The recent events of one ROI, binned on the ROI grid, and the bins kept after the noise and occluder filters.
+#[derive(Debug, Clone, Default)]
+pub(super) struct EventBins {
+    /// Grid width, bins.
+    pub(super) width: u32,
+    /// Grid height, bins.
+    pub(super) height: u32,
+    /// Events per bin (saturating).
+    hits: Vec<u8>,
+    /// Per bin, whether it is kept (row-major, `width x height`).
+    pub(super) kept: Vec<bool>,
+    /// Centres of kept bins outside the predicted silhouette, full-image pixel coordinates (the hinge's only).
+    pub(super) candidates: Vec<[f64; 2]>,
+    /// Scratch: ROI column of each image column of the binning box (-1 outside).
+    column_bins: Vec<i32>,
+    /// Scratch: per bin, occupied bins among itself and its left and right neighbours.
+    row_counts: Vec<u8>,
+    /// The ROI of the latest binning.
+    pub(super) roi: Option<Roi>,
+    /// Kept bins of the latest collection.
+    pub(super) kept_bins: usize,
+    /// Kept bins outside the predicted silhouette.
+    pub(super) outside: usize,
+    /// The window [`Self::bin_ahead`] binned, until [`Self::collect`] or [`Self::take_prebinned`].
+    prebinned: Option<BinnedWindow>,
+}
+
+impl EventBins {
     /// Bins the events of `surface` in `window` ahead of [`Self::collect`] (which reuses them if its call names the
     /// same window, and bins again otherwise): the part of the gathering that needs no render.
     pub fn bin_ahead(&mut self, surface: &EventSurface, window: BinnedWindow) {
@@ -160,12 +192,10 @@ impl EventEdges {
         self.kept.clear();
         self.kept.resize(n, false);
         self.candidates.clear();
-        self.association.clear();
-        self.contour_match.clear();
         // Sized once for the largest tick, so steady-state ticks do not allocate.
         self.candidates.reserve(max_candidates + 1);
-        self.association.reserve(max_candidates + 1);
-        self.stats = EventTermStats::default();
+        self.kept_bins = 0;
+        self.outside = 0;
         let sx = f64::from(w) / roi.width;
         let sy = f64::from(h) / roi.height;
         let (wu, hu) = (w as usize, h as usize);
@@ -200,14 +230,14 @@ impl EventEdges {
                 }
             }
         }
-        self.stats.bins += bins;
-        self.stats.outside += outside;
+        self.kept_bins += bins;
+        self.outside += outside;
         let (wi, hi) = (w as i64, h as i64);
         if term.kind != EventTermKind::Hinge {
             // Only the hinge uses candidates.
             return;
         }
-        let stride = self.stats.outside.div_ceil(max_candidates.max(1)).max(1);
+        let stride = self.outside.div_ceil(max_candidates.max(1)).max(1);
         let mut seen = 0usize;
         for j in 0..hi {
             for i in 0..wi {
@@ -224,5 +254,43 @@ impl EventEdges {
                 seen += 1;
             }
         }
+    }
+
+    /// Fraction of `view`'s contour points at `pose` that have a kept event bin within two bins (event support of
+    /// a moving outline); `None` without contour.
+    pub fn contour_support(
+        &self,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        camera: &PinholeCamera,
+    ) -> Option<f64> {
+        let roi = self.roi?;
+        if view.contour.is_empty() {
+            return None;
+        }
+        let sx = f64::from(self.width) / roi.width;
+        let sy = f64::from(self.height) / roi.height;
+        let (wi, hi) = (i64::from(self.width), i64::from(self.height));
+        let mut supported = 0usize;
+        for cp in &view.contour {
+            let p = pose * cp.position;
+            let Some(uv) = camera.project(&p) else {
+                continue;
+            };
+            let i = ((uv.x + 0.5 - roi.x) * sx) as i64;
+            let j = ((uv.y + 0.5 - roi.y) * sy) as i64;
+            let mut hit = false;
+            'search: for dj in -2..=2 {
+                for di in -2..=2 {
+                    let (a, b) = (i + di, j + dj);
+                    if a >= 0 && b >= 0 && a < wi && b < hi && self.kept[(b * wi + a) as usize] {
+                        hit = true;
+                        break 'search;
+                    }
+                }
+            }
+            supported += usize::from(hit);
+        }
+        Some(supported as f64 / view.contour.len() as f64)
     }
 }

@@ -1,8 +1,8 @@
 //! The harness's own checks, run beside the trackers: `static` (the first pose held: the floor any tracker must
 //! beat) and `gt-noise` (ground truth with seeded Gaussian noise: scores must fall as the noise grows).
 
-use super::bench::{Method, MethodInput};
-use super::sequence::EvalError;
+use super::method::{Method, MethodInput};
+use crate::sequence::EvalError;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
