@@ -15,376 +15,455 @@ pub struct InvalidParameter {
     pub expected: &'static str,
 }
 
-fn check(
-    key: &'static str,
-    value: f64,
-    ok: impl Fn(f64) -> bool,
-    expected: &'static str,
-) -> Result<(), InvalidParameter> {
-    if value.is_finite() && ok(value) {
-        Ok(())
-    } else {
-        Err(InvalidParameter {
-            key,
-            value: value.to_string(),
-            expected,
-        })
-    }
-}
-
 const POSITIVE: &str = "must be a finite number > 0";
 const NON_NEGATIVE: &str = "must be a finite number >= 0";
 const UNIT: &str = "must be a finite number in [0, 1]";
 
+/// What a parameter must be.
+#[derive(Debug, Clone, Copy)]
+enum Rule {
+    /// Greater than 0 (the message says how).
+    Positive(&'static str),
+    /// 0 or more.
+    NonNegative,
+    /// In [0, 1].
+    Unit,
+    /// In (0, 1] (the message says how).
+    PositiveUnit(&'static str),
+    /// Any finite number.
+    Finite,
+    /// In [low, high] (the message says so in the key's units).
+    Within(f64, f64, &'static str),
+    /// At most the bound.
+    AtMost(f64, &'static str),
+    /// At least the bound.
+    AtLeast(f64, &'static str),
+}
+
+impl Rule {
+    /// Whether finite `v` follows the rule, and how the rule is worded.
+    fn accepts(self, v: f64) -> (bool, &'static str) {
+        match self {
+            Rule::Positive(expected) => (v > 0.0, expected),
+            Rule::NonNegative => (v >= 0.0, NON_NEGATIVE),
+            Rule::Unit => ((0.0..=1.0).contains(&v), UNIT),
+            Rule::PositiveUnit(expected) => (v > 0.0 && v <= 1.0, expected),
+            Rule::Finite => (true, "must be a finite number"),
+            Rule::Within(low, high, expected) => ((low..=high).contains(&v), expected),
+            Rule::AtMost(high, expected) => (v <= high, expected),
+            Rule::AtLeast(low, expected) => (v >= low, expected),
+        }
+    }
+}
+
+/// One parameter's value and the rule it must follow.
+#[derive(Debug, Clone, Copy)]
+struct Check {
+    key: &'static str,
+    value: f64,
+    rule: Rule,
+}
+
+impl Check {
+    fn new(key: &'static str, value: f64, rule: Rule) -> Self {
+        Self { key, value, rule }
+    }
+
+    /// `Ok` if the value is finite and follows the rule, else the error naming the key.
+    fn run(&self) -> Result<(), InvalidParameter> {
+        let (ok, expected) = self.rule.accepts(self.value);
+        if self.value.is_finite() && ok {
+            Ok(())
+        } else {
+            Err(InvalidParameter {
+                key: self.key,
+                value: self.value.to_string(),
+                expected,
+            })
+        }
+    }
+}
+
 impl TrackerConfig {
     /// Checks every numeric parameter's range; the first offending key is reported.
     pub fn validate(&self) -> Result<(), InvalidParameter> {
-        let pos = |v: f64| v > 0.0;
-        let non_neg = |v: f64| v >= 0.0;
-        let unit = |v: f64| (0.0..=1.0).contains(&v);
-        check(
-            "roi_size",
-            f64::from(self.roi_size),
-            |v| (16.0..=1024.0).contains(&v),
-            "must be 16 to 1024 pixels",
-        )?;
-        check(
-            "object_threads",
-            self.object_threads as f64,
-            |v| v <= 256.0,
-            "must be 0 (one per core) to 256",
-        )?;
-        check(
-            "roi_scale",
-            self.roi_scale,
-            |v| (0.5..=4.0).contains(&v),
-            "must be 0.5 to 4 diameters",
-        )?;
-        check(
-            "render_mesh_simplify_above",
-            self.render_mesh_simplify_above as f64,
-            |v| v <= 100_000_000.0,
-            "must be at most 100000000 triangles",
-        )?;
-        check(
-            "render_mesh_tolerance_px",
-            self.render_mesh_tolerance_px,
-            |v| (0.0..=2.0).contains(&v),
-            "must be 0 (the mesh as loaded) to 2 ROI pixels",
-        )?;
-        check(
-            "iterations",
-            f64::from(self.iterations),
-            |v| v <= 100.0,
-            "must be at most 100",
-        )?;
-        check("damping", self.damping, non_neg, NON_NEGATIVE)?;
-        check(
-            "max_depth_age_ms",
-            self.max_depth_age_ms,
-            |v| (0.0..=MAX_DEPTH_AGE_LIMIT_MS).contains(&v),
-            "must be 0 to 500 ms",
-        )?;
-        check(
-            "retrack_max_events",
-            self.retrack_max_events as f64,
-            |v| v <= 100_000_000.0,
-            "must be at most 100000000 (2.4 GB)",
-        )?;
-        check(
-            "prediction_gain",
-            self.prediction_gain,
-            |v| (0.0..=2.0).contains(&v),
-            "must be 0 to 2",
-        )?;
-        check(
-            "hide_occluded_max_share",
-            self.hide_occluded_max_share,
-            |v| (0.0..=1.0).contains(&v),
-            "must be 0 to 1",
-        )?;
-        check(
-            "depth_fallback_margin",
-            self.depth_fallback_margin,
-            |_| true,
-            "must be a finite number",
-        )?;
-        check(
-            "depth_fallback_motion_margin",
-            self.depth_fallback_motion_margin,
-            |_| true,
-            "must be a finite number",
-        )?;
-        check(
-            "depth_fallback_estimate_motion_margin",
-            self.depth_fallback_estimate_motion_margin,
-            |_| true,
-            "must be a finite number",
-        )?;
-        check(
-            "depth_fallback_event_weight",
-            self.depth_fallback_event_weight,
-            |v| v >= 0.0,
-            "must be 0 or more",
-        )?;
-        check(
-            "carried_depth_weight",
-            self.carried_depth_weight,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check("event_weight", self.event_weight, non_neg, NON_NEGATIVE)?;
-        check("event_window_px", self.event_window_px, pos, POSITIVE)?;
-        check(
-            "min_event_window_us",
-            self.min_event_window_us as f64,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "max_event_window_us",
-            self.max_event_window_us as f64,
-            |v| v >= self.min_event_window_us as f64,
-            "must be >= min_event_window_us",
-        )?;
-        check(
-            "max_step_rotation_deg",
-            self.max_step_rotation_deg,
-            pos,
-            POSITIVE,
-        )?;
-        check(
-            "max_step_translation_diameters",
-            self.max_step_translation_diameters,
-            pos,
-            POSITIVE,
-        )?;
-        check(
-            "max_surface_points",
-            self.max_surface_points as f64,
-            pos,
-            "must be at least 1",
-        )?;
-        check(
-            "max_contour_points",
-            self.max_contour_points as f64,
-            pos,
-            "must be at least 1",
-        )?;
-        check(
-            "max_event_points",
-            self.max_event_points as f64,
-            pos,
-            "must be at least 1",
-        )?;
-        check("velocity_smoothing", self.velocity_smoothing, unit, UNIT)?;
-        check(
-            "velocity_smoothing_depth",
-            self.velocity_smoothing_depth,
-            unit,
-            UNIT,
-        )?;
-        check("max_speed", self.max_speed, pos, POSITIVE)?;
-        check("max_angular_speed", self.max_angular_speed, pos, POSITIVE)?;
-        check(
-            "prior_translation_m",
-            self.prior_translation_m,
-            pos,
-            POSITIVE,
-        )?;
-        check("prior_rotation_deg", self.prior_rotation_deg, pos, POSITIVE)?;
-        check(
-            "intensity.contrast",
-            f64::from(self.intensity.contrast),
-            pos,
-            POSITIVE,
-        )?;
-        check(
-            "intensity.cutoff_hz",
-            f64::from(self.intensity.cutoff_hz),
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        let d = &self.depth_term;
-        check("depth_term.sigma_0", d.sigma_0, pos, POSITIVE)?;
-        check("depth_term.sigma_z2", d.sigma_z2, non_neg, NON_NEGATIVE)?;
-        check("depth_term.occlusion_gap", d.occlusion_gap, pos, POSITIVE)?;
-        check("depth_term.max_residual", d.max_residual, pos, POSITIVE)?;
-        check(
-            "event_term.contrast_step_translation",
-            self.event_term.contrast_step_translation,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.contrast_step_rotation",
-            self.event_term.contrast_step_rotation,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.contrast_rounds",
-            f64::from(self.event_term.contrast_rounds),
-            |v| v <= 16.0,
-            "must be at most 16",
-        )?;
-        let it = &self.intensity_term;
-        check("intensity_term.weight", it.weight, non_neg, NON_NEGATIVE)?;
-        check(
-            "intensity_term.box_px",
-            f64::from(it.box_px),
-            |v| (1.0..=16.0).contains(&v),
-            "must be 1 to 16",
-        )?;
-        check(
-            "intensity_term.min_step",
-            it.min_step,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check("intensity_term.full_step", it.full_step, pos, POSITIVE)?;
-        check(
-            "intensity_term.max_distance_px",
-            it.max_distance_px,
-            |v| (0.0..=100.0).contains(&v),
-            "must be 0 to 100",
-        )?;
-        check("intensity_term.sigma_px", it.sigma_px, pos, POSITIVE)?;
-        let e = &self.event_term;
-        check(
-            "event_term.line_box_bins",
-            f64::from(e.line_box_bins),
-            |v| (1.0..=32.0).contains(&v),
-            "must be 1 to 32",
-        )?;
-        check(
-            "event_term.line_min_contrast",
-            e.line_min_contrast,
-            |v| v > 0.0 && v <= 1.0,
-            "must be in (0, 1]",
-        )?;
-        check("event_term.sigma_px", e.sigma_px, pos, POSITIVE)?;
-        check(
-            "event_term.max_distance_px",
-            e.max_distance_px,
-            pos,
-            POSITIVE,
-        )?;
-        check(
-            "event_term.match_distance_px",
-            e.match_distance_px,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.match_weight",
-            e.match_weight,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.min_sweep_px",
-            e.min_sweep_px,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.edge_tolerance_px",
-            e.edge_tolerance_px,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.hinge_weight",
-            e.hinge_weight,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.search_px",
-            e.search_px,
-            |v| (0.0..=200.0).contains(&v),
-            "must be 0 to 200 pixels",
-        )?;
-        check(
-            "event_term.search_min_px",
-            e.search_min_px,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.search_speed_factor",
-            e.search_speed_factor,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.search_min_gain",
-            e.search_min_gain,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "event_term.search_aperture_tolerance",
-            e.search_aperture_tolerance,
-            unit,
-            UNIT,
-        )?;
-        let q = &self.quality;
-        check(
-            "quality.degraded_below",
-            f64::from(q.degraded_below),
-            unit,
-            UNIT,
-        )?;
-        check("quality.lost_below", f64::from(q.lost_below), unit, UNIT)?;
-        check(
-            "quality.lost_mean_below",
-            f64::from(q.lost_mean_below),
-            unit,
-            UNIT,
-        )?;
-        check(
-            "quality.lost_mean_ticks",
-            f64::from(q.lost_mean_ticks),
-            |v| v <= 12_000.0,
-            "must be at most 12000 ticks (100 s at 120 Hz)",
-        )?;
-        check(
-            "quality.recover_ticks",
-            f64::from(q.recover_ticks),
-            |v| v <= 12_000.0,
-            "must be at most 12000 ticks (100 s at 120 Hz)",
-        )?;
-        let r = &self.redetect;
-        check(
-            "redetect.cell_px",
-            f64::from(r.cell_px),
-            |v| (1.0..=64.0).contains(&v),
-            "must be 1 to 64 depth pixels",
-        )?;
-        check(
-            "redetect.foreground_margin_m",
-            r.foreground_margin_m,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check(
-            "redetect.candidates",
-            r.candidates as f64,
-            |v| v <= 16.0,
-            "must be at most 16",
-        )?;
-        check(
-            "redetect.foreground_sigmas",
-            r.foreground_sigmas,
-            non_neg,
-            NON_NEGATIVE,
-        )?;
-        check("redetect.min_support", r.min_support, non_neg, NON_NEGATIVE)?;
-        check("redetect.margin", r.margin, non_neg, NON_NEGATIVE)?;
-        check("redetect.min_score", r.min_score, unit, UNIT)?;
+        self.view_checks().iter().try_for_each(Check::run)?;
+        self.optimiser_checks().iter().try_for_each(Check::run)?;
+        self.motion_checks().iter().try_for_each(Check::run)?;
+        self.depth_use_checks().iter().try_for_each(Check::run)?;
+        self.event_use_checks().iter().try_for_each(Check::run)?;
+        self.depth_term_checks().iter().try_for_each(Check::run)?;
+        self.intensity_term_checks()
+            .iter()
+            .try_for_each(Check::run)?;
+        self.event_term_checks().iter().try_for_each(Check::run)?;
+        self.quality_checks().iter().try_for_each(Check::run)?;
+        self.redetect_checks().iter().try_for_each(Check::run)?;
         Ok(())
+    }
+
+    /// The checks of the region of interest, rendering and threads, in the order they are reported.
+    fn view_checks(&self) -> [Check; 8] {
+        [
+            Check::new(
+                "roi_size",
+                f64::from(self.roi_size),
+                Rule::Within(16.0, 1024.0, "must be 16 to 1024 pixels"),
+            ),
+            Check::new(
+                "roi_scale",
+                self.roi_scale,
+                Rule::Within(0.5, 4.0, "must be 0.5 to 4 diameters"),
+            ),
+            Check::new(
+                "object_threads",
+                self.object_threads as f64,
+                Rule::AtMost(256.0, "must be 0 (one per core) to 256"),
+            ),
+            Check::new(
+                "render_mesh_simplify_above",
+                self.render_mesh_simplify_above as f64,
+                Rule::AtMost(100_000_000.0, "must be at most 100000000 triangles"),
+            ),
+            Check::new(
+                "render_mesh_tolerance_px",
+                self.render_mesh_tolerance_px,
+                Rule::Within(0.0, 2.0, "must be 0 (the mesh as loaded) to 2 ROI pixels"),
+            ),
+            Check::new(
+                "max_surface_points",
+                self.max_surface_points as f64,
+                Rule::Positive("must be at least 1"),
+            ),
+            Check::new(
+                "max_contour_points",
+                self.max_contour_points as f64,
+                Rule::Positive("must be at least 1"),
+            ),
+            Check::new(
+                "max_event_points",
+                self.max_event_points as f64,
+                Rule::Positive("must be at least 1"),
+            ),
+        ]
+    }
+
+    /// The checks of the optimiser and its prior, in the order they are reported.
+    fn optimiser_checks(&self) -> [Check; 6] {
+        [
+            Check::new(
+                "iterations",
+                f64::from(self.iterations),
+                Rule::AtMost(100.0, "must be at most 100"),
+            ),
+            Check::new("damping", self.damping, Rule::NonNegative),
+            Check::new(
+                "max_step_rotation_deg",
+                self.max_step_rotation_deg,
+                Rule::Positive(POSITIVE),
+            ),
+            Check::new(
+                "max_step_translation_diameters",
+                self.max_step_translation_diameters,
+                Rule::Positive(POSITIVE),
+            ),
+            Check::new(
+                "prior_translation_m",
+                self.prior_translation_m,
+                Rule::Positive(POSITIVE),
+            ),
+            Check::new(
+                "prior_rotation_deg",
+                self.prior_rotation_deg,
+                Rule::Positive(POSITIVE),
+            ),
+        ]
+    }
+
+    /// The checks of the motion model, in the order they are reported.
+    fn motion_checks(&self) -> [Check; 5] {
+        [
+            Check::new(
+                "prediction_gain",
+                self.prediction_gain,
+                Rule::Within(0.0, 2.0, "must be 0 to 2"),
+            ),
+            Check::new("velocity_smoothing", self.velocity_smoothing, Rule::Unit),
+            Check::new(
+                "velocity_smoothing_depth",
+                self.velocity_smoothing_depth,
+                Rule::Unit,
+            ),
+            Check::new("max_speed", self.max_speed, Rule::Positive(POSITIVE)),
+            Check::new(
+                "max_angular_speed",
+                self.max_angular_speed,
+                Rule::Positive(POSITIVE),
+            ),
+        ]
+    }
+
+    /// The checks of the use of depth: carried, late, the safety net, in the order they are reported.
+    fn depth_use_checks(&self) -> [Check; 8] {
+        [
+            Check::new(
+                "carried_depth_weight",
+                self.carried_depth_weight,
+                Rule::NonNegative,
+            ),
+            Check::new(
+                "hide_occluded_max_share",
+                self.hide_occluded_max_share,
+                Rule::Within(0.0, 1.0, "must be 0 to 1"),
+            ),
+            Check::new(
+                "max_depth_age_ms",
+                self.max_depth_age_ms,
+                Rule::Within(0.0, MAX_DEPTH_AGE_LIMIT_MS, "must be 0 to 500 ms"),
+            ),
+            Check::new(
+                "retrack_max_events",
+                self.retrack_max_events as f64,
+                Rule::AtMost(100_000_000.0, "must be at most 100000000 (2.4 GB)"),
+            ),
+            Check::new(
+                "depth_fallback_margin",
+                self.depth_fallback_margin,
+                Rule::Finite,
+            ),
+            Check::new(
+                "depth_fallback_motion_margin",
+                self.depth_fallback_motion_margin,
+                Rule::Finite,
+            ),
+            Check::new(
+                "depth_fallback_estimate_motion_margin",
+                self.depth_fallback_estimate_motion_margin,
+                Rule::Finite,
+            ),
+            Check::new(
+                "depth_fallback_event_weight",
+                self.depth_fallback_event_weight,
+                Rule::AtLeast(0.0, "must be 0 or more"),
+            ),
+        ]
+    }
+
+    /// The checks of the use of events and intensity, in the order they are reported.
+    fn event_use_checks(&self) -> [Check; 6] {
+        [
+            Check::new("event_weight", self.event_weight, Rule::NonNegative),
+            Check::new(
+                "event_window_px",
+                self.event_window_px,
+                Rule::Positive(POSITIVE),
+            ),
+            Check::new(
+                "min_event_window_us",
+                self.min_event_window_us as f64,
+                Rule::NonNegative,
+            ),
+            Check::new(
+                "max_event_window_us",
+                self.max_event_window_us as f64,
+                Rule::AtLeast(
+                    self.min_event_window_us as f64,
+                    "must be >= min_event_window_us",
+                ),
+            ),
+            Check::new(
+                "intensity.contrast",
+                f64::from(self.intensity.contrast),
+                Rule::Positive(POSITIVE),
+            ),
+            Check::new(
+                "intensity.cutoff_hz",
+                f64::from(self.intensity.cutoff_hz),
+                Rule::NonNegative,
+            ),
+        ]
+    }
+
+    /// The checks of the depth term, in the order they are reported.
+    fn depth_term_checks(&self) -> [Check; 7] {
+        let d = &self.depth_term;
+        [
+            Check::new("depth_term.sigma_0", d.sigma_0, Rule::Positive(POSITIVE)),
+            Check::new("depth_term.sigma_z2", d.sigma_z2, Rule::NonNegative),
+            Check::new(
+                "depth_term.occlusion_gap",
+                d.occlusion_gap,
+                Rule::Positive(POSITIVE),
+            ),
+            Check::new(
+                "depth_term.max_residual",
+                d.max_residual,
+                Rule::Positive(POSITIVE),
+            ),
+            Check::new(
+                "event_term.contrast_step_translation",
+                self.event_term.contrast_step_translation,
+                Rule::NonNegative,
+            ),
+            Check::new(
+                "event_term.contrast_step_rotation",
+                self.event_term.contrast_step_rotation,
+                Rule::NonNegative,
+            ),
+            Check::new(
+                "event_term.contrast_rounds",
+                f64::from(self.event_term.contrast_rounds),
+                Rule::AtMost(16.0, "must be at most 16"),
+            ),
+        ]
+    }
+
+    /// The checks of the intensity term, in the order they are reported.
+    fn intensity_term_checks(&self) -> [Check; 6] {
+        let it = &self.intensity_term;
+        [
+            Check::new("intensity_term.weight", it.weight, Rule::NonNegative),
+            Check::new(
+                "intensity_term.box_px",
+                f64::from(it.box_px),
+                Rule::Within(1.0, 16.0, "must be 1 to 16"),
+            ),
+            Check::new("intensity_term.min_step", it.min_step, Rule::NonNegative),
+            Check::new(
+                "intensity_term.full_step",
+                it.full_step,
+                Rule::Positive(POSITIVE),
+            ),
+            Check::new(
+                "intensity_term.max_distance_px",
+                it.max_distance_px,
+                Rule::Within(0.0, 100.0, "must be 0 to 100"),
+            ),
+            Check::new(
+                "intensity_term.sigma_px",
+                it.sigma_px,
+                Rule::Positive(POSITIVE),
+            ),
+        ]
+    }
+
+    /// The checks of the event term, in the order they are reported.
+    fn event_term_checks(&self) -> [Check; 14] {
+        let e = &self.event_term;
+        [
+            Check::new(
+                "event_term.line_box_bins",
+                f64::from(e.line_box_bins),
+                Rule::Within(1.0, 32.0, "must be 1 to 32"),
+            ),
+            Check::new(
+                "event_term.line_min_contrast",
+                e.line_min_contrast,
+                Rule::PositiveUnit("must be in (0, 1]"),
+            ),
+            Check::new("event_term.sigma_px", e.sigma_px, Rule::Positive(POSITIVE)),
+            Check::new(
+                "event_term.max_distance_px",
+                e.max_distance_px,
+                Rule::Positive(POSITIVE),
+            ),
+            Check::new(
+                "event_term.match_distance_px",
+                e.match_distance_px,
+                Rule::NonNegative,
+            ),
+            Check::new("event_term.match_weight", e.match_weight, Rule::NonNegative),
+            Check::new("event_term.min_sweep_px", e.min_sweep_px, Rule::NonNegative),
+            Check::new(
+                "event_term.edge_tolerance_px",
+                e.edge_tolerance_px,
+                Rule::NonNegative,
+            ),
+            Check::new("event_term.hinge_weight", e.hinge_weight, Rule::NonNegative),
+            Check::new(
+                "event_term.search_px",
+                e.search_px,
+                Rule::Within(0.0, 200.0, "must be 0 to 200 pixels"),
+            ),
+            Check::new(
+                "event_term.search_min_px",
+                e.search_min_px,
+                Rule::NonNegative,
+            ),
+            Check::new(
+                "event_term.search_speed_factor",
+                e.search_speed_factor,
+                Rule::NonNegative,
+            ),
+            Check::new(
+                "event_term.search_min_gain",
+                e.search_min_gain,
+                Rule::NonNegative,
+            ),
+            Check::new(
+                "event_term.search_aperture_tolerance",
+                e.search_aperture_tolerance,
+                Rule::Unit,
+            ),
+        ]
+    }
+
+    /// The checks of quality and state, in the order they are reported.
+    fn quality_checks(&self) -> [Check; 5] {
+        let q = &self.quality;
+        [
+            Check::new(
+                "quality.degraded_below",
+                f64::from(q.degraded_below),
+                Rule::Unit,
+            ),
+            Check::new("quality.lost_below", f64::from(q.lost_below), Rule::Unit),
+            Check::new(
+                "quality.lost_mean_below",
+                f64::from(q.lost_mean_below),
+                Rule::Unit,
+            ),
+            Check::new(
+                "quality.lost_mean_ticks",
+                f64::from(q.lost_mean_ticks),
+                Rule::AtMost(12_000.0, "must be at most 12000 ticks (100 s at 120 Hz)"),
+            ),
+            Check::new(
+                "quality.recover_ticks",
+                f64::from(q.recover_ticks),
+                Rule::AtMost(12_000.0, "must be at most 12000 ticks (100 s at 120 Hz)"),
+            ),
+        ]
+    }
+
+    /// The checks of re-detection, in the order they are reported.
+    fn redetect_checks(&self) -> [Check; 7] {
+        let r = &self.redetect;
+        [
+            Check::new(
+                "redetect.cell_px",
+                f64::from(r.cell_px),
+                Rule::Within(1.0, 64.0, "must be 1 to 64 depth pixels"),
+            ),
+            Check::new(
+                "redetect.foreground_margin_m",
+                r.foreground_margin_m,
+                Rule::NonNegative,
+            ),
+            Check::new(
+                "redetect.candidates",
+                r.candidates as f64,
+                Rule::AtMost(16.0, "must be at most 16"),
+            ),
+            Check::new(
+                "redetect.foreground_sigmas",
+                r.foreground_sigmas,
+                Rule::NonNegative,
+            ),
+            Check::new("redetect.min_support", r.min_support, Rule::NonNegative),
+            Check::new("redetect.margin", r.margin, Rule::NonNegative),
+            Check::new("redetect.min_score", r.min_score, Rule::Unit),
+        ]
     }
 }
 

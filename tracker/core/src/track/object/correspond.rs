@@ -13,7 +13,7 @@ use super::state::ObjectState;
 use crate::refine::{BinnedWindow, EventTermKind, apply_step};
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::estimate::TrackingState;
-use nalgebra::{Isometry3, Translation3, Vector3};
+use nalgebra::{Isometry3, Translation3, Vector3, Vector6};
 use scene::geometry::{PinholeCamera, Roi};
 
 /// Registers this tick's depth frame as the new `D_0` and renders `D_t` at the predicted pose in the ROI chosen
@@ -196,49 +196,13 @@ pub(super) fn correspond(
     let use_intensity = use_events && config.intensity_term.weight > 0.0;
     let contrast_max = use_events && event_term.kind == EventTermKind::ContrastMax;
     let use_event_residuals = use_events && !contrast_max;
-    let mut contrast_velocity = None;
-    let mut window_s = 0.0;
-    if use_events {
-        let window = event_window_us(model, state, inputs.camera, config);
-        window_s = window as f64 * 1e-6;
-        // Another object nearer than this one's centre hides it: its events are its own.
-        let occluder_z = model.center_at(&predicted).z as f32;
-        scratch.edges.collect(
-            &event_term,
-            inputs.surface,
-            roi,
-            scratch.target.mask(),
-            scratch.target.depth(),
-            occluder_z,
-            model.label,
-            inputs.t_us,
-            window,
-            config.max_event_points,
-            prebinned,
-        );
-        if contrast_max {
-            let c = model.center_at(&predicted);
-            scratch.edges.lift_events(
-                inputs.surface,
-                inputs.camera,
-                scratch.target.depth(),
-                scratch.target.mask(),
-                model.label,
-                inputs.t_us,
-                window,
-                c.z,
-                config.max_event_points * 8,
-            );
-            contrast_velocity = Some(scratch.edges.maximise_contrast(
-                inputs.camera,
-                &c,
-                &state.velocity,
-                event_term.contrast_step_translation,
-                event_term.contrast_step_rotation,
-                event_term.contrast_rounds,
-            ));
-        }
-    }
+    let (window_s, contrast_velocity) = if use_events {
+        match_events(
+            model, state, scratch, inputs, config, roi, &predicted, prebinned,
+        )
+    } else {
+        (0.0, None)
+    };
     let mut pose = match contrast_velocity {
         // The motion contrast maximisation found, from the previous estimate.
         Some(xi) => {
@@ -248,28 +212,9 @@ pub(super) fn correspond(
         None => predicted,
     };
     if use_event_residuals
-        && let Some([du, dv]) = scratch.edges.search_shift(
-            &event_term,
-            &scratch.view,
-            &predicted,
-            inputs.camera,
-            search_range(model, state, inputs, config),
-            (event_term.search_aperture_tolerance > 0.0)
-                .then(|| image_motion_direction(model, state, &predicted, inputs))
-                .flatten(),
-        )
+        && let Some(shifted) = outline_shift(model, state, scratch, inputs, config, &predicted)
     {
-        // Move the centre laterally by the image shift at its depth.
-        let c = model.center_at(&predicted);
-        let shift = Vector3::new(
-            du * c.z / inputs.camera.fx,
-            dv * c.z / inputs.camera.fy,
-            0.0,
-        );
-        pose = Isometry3::from_parts(
-            Translation3::from(predicted.translation.vector + shift),
-            predicted.rotation,
-        );
+        pose = shifted;
     }
     if depth.weight > 0.0 && !depth.fresh && !(depth.at_predicted && pose == predicted) {
         state
@@ -307,4 +252,96 @@ fn search_range(
             .max(event_term.search_min_px)
             .min(event_term.search_px)
     }
+}
+
+/// Matches the events of this tick's window to the render: collects them in the ROI (`prebinned` if the window was
+/// binned ahead) and, for contrast maximisation, finds the velocity that sharpens them. Returns the window in
+/// seconds and that velocity, if any.
+#[allow(clippy::too_many_arguments)]
+fn match_events(
+    model: &ObjectModel,
+    state: &ObjectState,
+    scratch: &mut TickScratch,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+    roi: &Roi,
+    predicted: &Isometry3<f64>,
+    prebinned: Option<BinnedWindow>,
+) -> (f64, Option<Vector6<f64>>) {
+    let event_term = config.event_term;
+    let window = event_window_us(model, state, inputs.camera, config);
+    let window_s = window as f64 * 1e-6;
+    // Another object nearer than this one's centre hides it: its events are its own.
+    let occluder_z = model.center_at(predicted).z as f32;
+    scratch.edges.collect(
+        &event_term,
+        inputs.surface,
+        roi,
+        scratch.target.mask(),
+        scratch.target.depth(),
+        occluder_z,
+        model.label,
+        inputs.t_us,
+        window,
+        config.max_event_points,
+        prebinned,
+    );
+    if event_term.kind != EventTermKind::ContrastMax {
+        return (window_s, None);
+    }
+    let c = model.center_at(predicted);
+    scratch.edges.lift_events(
+        inputs.surface,
+        inputs.camera,
+        scratch.target.depth(),
+        scratch.target.mask(),
+        model.label,
+        inputs.t_us,
+        window,
+        c.z,
+        config.max_event_points * 8,
+    );
+    let velocity = scratch.edges.maximise_contrast(
+        inputs.camera,
+        &c,
+        &state.velocity,
+        event_term.contrast_step_translation,
+        event_term.contrast_step_rotation,
+        event_term.contrast_rounds,
+    );
+    (window_s, Some(velocity))
+}
+
+/// The prediction moved laterally by the image shift of the whole outline that the events show
+/// ([`crate::refine::EventEdges::search_shift`]), if the search finds one.
+fn outline_shift(
+    model: &ObjectModel,
+    state: &ObjectState,
+    scratch: &mut TickScratch,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+    predicted: &Isometry3<f64>,
+) -> Option<Isometry3<f64>> {
+    let event_term = config.event_term;
+    let [du, dv] = scratch.edges.search_shift(
+        &event_term,
+        &scratch.view,
+        predicted,
+        inputs.camera,
+        search_range(model, state, inputs, config),
+        (event_term.search_aperture_tolerance > 0.0)
+            .then(|| image_motion_direction(model, state, predicted, inputs))
+            .flatten(),
+    )?;
+    // Move the centre laterally by the image shift at its depth.
+    let c = model.center_at(predicted);
+    let shift = Vector3::new(
+        du * c.z / inputs.camera.fx,
+        dv * c.z / inputs.camera.fy,
+        0.0,
+    );
+    Some(Isometry3::from_parts(
+        Translation3::from(predicted.translation.vector + shift),
+        predicted.rotation,
+    ))
 }
