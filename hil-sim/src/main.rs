@@ -146,7 +146,8 @@ fn motion_parser() -> impl TypedValueParser<Value = MotionProfile> {
 
 /// `--speed`: the levels' names, so that `--help` and the reference list them.
 fn speed_parser() -> impl TypedValueParser<Value = SpeedLevel> {
-    PossibleValuesParser::new(SpeedLevel::ALL.map(SpeedLevel::name)).try_map(|s| s.parse::<SpeedLevel>())
+    PossibleValuesParser::new(SpeedLevel::ALL.map(SpeedLevel::name))
+        .try_map(|s| s.parse::<SpeedLevel>())
 }
 
 fn main() -> ExitCode {

@@ -22,7 +22,7 @@ prepare() {
     mkdir -p "$DIR"
     local built
     built=$(cargo bench -p eventtrack6d-tests --bench tick --no-run --message-format=json \
-        && cargo bench -p eventtrack6d --bench render --no-run --message-format=json \
+        && cargo bench -p eventtrack6d-scene --bench render --no-run --message-format=json \
         && cargo test --release -p eventtrack6d-tests --test render_gpu --no-run --message-format=json)
     for name in tick render render_gpu; do
         local exe
@@ -92,7 +92,7 @@ run() {
     echo "== CPU and wgpu renders agree (tests/tests/render_gpu.rs)"
     "$DIR/render_gpu" --test-threads 1 || status=1
 
-    echo "== renders alone (tracker/benches/render.rs)"
+    echo "== renders alone (tracker/scene/benches/render.rs)"
     "$DIR/render" --bench --warm-up-time 1 --measurement-time 3 || status=1
 
     echo "== one tracker tick (tests/benches/tick.rs), all cores"

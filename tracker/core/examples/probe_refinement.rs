@@ -5,7 +5,7 @@
 //! ticks between depth frames, and the rotation error per object axis. `--dump TICK WINDOW_US` writes
 //! `probe.png`: that tick's events of the last WINDOW_US with the true (green) and refined (red) outlines.
 //!
-//! `cargo run --release -p eventtrack6d --example probe_refinement -- REC [--mode bias|lag] [--lag-fraction F]
+//! `cargo run --release -p eventtrack6d-core --example probe_refinement -- REC [--mode bias|lag] [--lag-fraction F]
 //! [--method M] [--params TOML] [--dump TICK WINDOW_US]`
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]

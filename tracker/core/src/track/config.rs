@@ -117,7 +117,7 @@ pub struct TrackerConfig {
     /// between the two depth frames before it: unlike the extrapolated start, the events since cannot have
     /// changed that motion, so one tick the events got wrong does not spoil it. On by default: it lifted dev
     /// ADD-S from 62.2 to 66.7 and holdout from 63.5 to 65.7, and ended `lost` on slow and moderate sequences
-    /// (BENCHMARKS.md, eighteenth round).
+    /// (docs/history/tuning.md, eighteenth round).
     pub depth_fallback_anchored: bool,
     /// Whether the ROI at a depth exposure grows to also cover the extrapolated fallback start.
     pub roi_widen_at_depth: bool,
@@ -128,11 +128,11 @@ pub struct TrackerConfig {
     /// term's `occlusion_gap`, at the predicted pose) are left out of the event and intensity terms: a hand
     /// gripping the object hides that part of its outline, and the events there are the hand's. Off by
     /// default: it lifts the hand-switch sequences but did not lower failures or slow / moderate `lost`
-    /// (BENCHMARKS.md, fifteenth round).
+    /// (docs/history/tuning.md, fifteenth round).
     pub hide_occluded_outline: bool,
     /// With `hide_occluded_outline`, the largest share (0..=1) of the outline samples hidden on a tick; when
     /// more would be hidden, the whole outline is kept (a thin object mostly under a hand). 0.5 measured better
-    /// than 1 on the hand-switch sequences (BENCHMARKS.md, fifteenth round).
+    /// than 1 on the hand-switch sequences (docs/history/tuning.md, fifteenth round).
     pub hide_occluded_max_share: f64,
     /// Fraction of the estimated velocity the prediction extrapolates with (1 = constant velocity).
     pub prediction_gain: f64,

@@ -160,7 +160,7 @@ pub enum RenderDevice {
 
 impl RenderDevice {
     /// The warning an operator should see for this device, or `None`: a Vulkan driver that rasterises on the CPU
-    /// is slower than the CPU renderer (BENCHMARKS.md, "One tracker tick"), so choosing it is almost always a
+    /// is slower than the CPU renderer (BENCHMARKS.md, "One tracker tick: CPU against wgpu"), so choosing it is almost always a
     /// mistake (no GPU driver installed, or none found).
     pub fn warning(&self) -> Option<String> {
         match self {

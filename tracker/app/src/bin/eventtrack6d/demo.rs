@@ -20,9 +20,9 @@ use std::path::{Path, PathBuf};
 ///
 /// At the end it prints poses published, rate, latency per sink, drops, timeline and tracker counters, depth
 /// arrival times, accuracy against the ground truth (ADD-S, ADD, AR) and the output files, and writes overlay.png
-/// (reconstructed intensity with the model outline at six published poses). How to read each line:
-/// docs/runtime.md. The options choose another sequence (each one is generated once and cached) or change how it
-/// is replayed.
+/// (reconstructed intensity with the model outline at six published poses). How to read each line: the README's
+/// "What the demo prints", and docs/runtime.md. The options choose another sequence (each one is generated once
+/// and cached) or change how it is replayed.
 #[derive(Debug, Args)]
 pub struct DemoArgs {
     /// Output directory for poses.csv, poses.candump.log and overlay.png, and poses.revised.csv when late depth

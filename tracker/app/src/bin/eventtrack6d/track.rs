@@ -64,7 +64,7 @@ pub struct TrackArgs {
     /// estimate (green tracking, yellow degraded, red lost). The poses are the same with or without it.
     #[arg(long, value_name = "DIR")]
     pub overlay: Option<PathBuf>,
-    /// Draw an overlay every N ticks (120 Hz ticks; 12 = 10 per second).
+    /// With --overlay: draw an overlay every N ticks, 1 to 1000000 (120 Hz ticks; 12 = 10 per second).
     #[arg(long, default_value_t = 12, value_name = "N", requires = "overlay",
           value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
     pub overlay_every: u64,

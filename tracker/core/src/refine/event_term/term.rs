@@ -74,7 +74,7 @@ pub struct EventTerm {
     /// that moves the outline least across that motion (then least along it). An edge along the motion fires
     /// no events, so the events hardly tell where the outline is across the motion: a long object moving
     /// sideways scores alike at every shift along its length. 0 (default) takes the best score, the first of
-    /// equal ones in scan order; 0.05 measured dev +2.3 and holdout -1.9 ADD-S (BENCHMARKS.md, thirteenth round).
+    /// equal ones in scan order; 0.05 measured dev +2.3 and holdout -1.9 ADD-S (docs/history/tuning.md, thirteenth round).
     pub search_aperture_tolerance: f64,
     /// Contrast maximisation: first step of the pattern search over the centre's velocity, m/s.
     pub contrast_step_translation: f64,
