@@ -17,6 +17,7 @@ use scene::render::{CpuRenderer, RenderAhead, Renderer, RendererKind, create_ren
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
+use tracker::track::DepthHandling;
 use tracker::track::{PoseTracker, TrackerConfig};
 
 /// Adds the wall time from its creation to its drop to `spent_ns`: held by [`HookedRenderer`] around one render.
@@ -46,7 +47,8 @@ fn bench_tracker(c: &mut Criterion, label: &str, s: &mut SteadyTracker) {
     depth_tick.depth_frame = Some(s.depth.index);
     c.bench_function(&format!("depth_tick_{label}_160"), |b| {
         b.iter(|| {
-            s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
+            s.tracker
+                .push_depth(depth_tick.t_us, &mut s.depth, DepthHandling::Now);
             out.clear();
             s.tracker.tick(&depth_tick, &mut out);
             s.tracker.prepare_next_tick();
@@ -103,7 +105,8 @@ fn bench_paced(
                     next += TICK_PERIOD;
                     std::thread::sleep(next.saturating_duration_since(Instant::now()));
                     if depth {
-                        s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
+                        s.tracker
+                            .push_depth(depth_tick.t_us, &mut s.depth, DepthHandling::Now);
                     }
                     out.clear();
                     let start = Instant::now();
@@ -176,7 +179,8 @@ fn bench_render_share(c: &mut Criterion, label: &str, mut s: SteadyTracker, spen
         b.iter_custom(|iters| {
             spent_ns.store(0, Ordering::Relaxed);
             for _ in 0..iters {
-                s.tracker.push_depth(depth_tick.t_us, &mut s.depth);
+                s.tracker
+                    .push_depth(depth_tick.t_us, &mut s.depth, DepthHandling::Now);
                 out.clear();
                 s.tracker.tick(&depth_tick, &mut out);
                 s.tracker.prepare_next_tick();

@@ -18,6 +18,7 @@ use hil_sim::objects::ObjectKind;
 use scene::render::CpuRenderer;
 use tracker::recording::{PoseTrack, recording_ticks};
 use tracker::recording::{recording_object, recording_rig};
+use tracker::track::DepthHandling;
 use tracker::track::{
     DepthFallbackCheck, EventTrack6d, FallbackRule, OfflineTiming, PoseEstimate, PoseTracker,
     TrackerConfig, TrackerCounters, track_recording, track_recording_timed,
@@ -247,8 +248,8 @@ impl PoseTracker for KnockedOff {
     fn push_events(&mut self, events: &[CdEvent]) {
         self.inner.push_events(events);
     }
-    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
-        self.inner.push_depth(t_us, frame);
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame, handling: DepthHandling) {
+        self.inner.push_depth(t_us, frame, handling);
     }
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
         let from = out.len();

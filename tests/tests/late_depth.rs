@@ -15,6 +15,7 @@ use scene::render::CpuRenderer;
 use std::path::Path;
 use tracker::recording::{PoseTrack, recording_ticks};
 use tracker::recording::{recording_object, recording_rig};
+use tracker::track::DepthHandling;
 use tracker::track::{
     EventTrack6d, OfflineStats, OfflineTiming, PoseEstimate, PoseTracker, TrackerConfig,
     TrackerCounters, track_recording_timed,
@@ -202,9 +203,9 @@ impl PoseTracker for ArrivalProbe {
     fn push_events(&mut self, events: &[CdEvent]) {
         self.inner.push_events(events);
     }
-    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame, handling: DepthHandling) {
         let before = self.inner.counters();
-        self.inner.push_depth(t_us, frame);
+        self.inner.push_depth(t_us, frame, handling);
         self.arrivals.push((before, self.inner.counters()));
     }
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
@@ -274,9 +275,9 @@ fn a_late_frame_is_tracked_again_when_it_arrives_not_at_the_next_tick() {
     }
 }
 
-/// Hands every depth frame over deferred ([`PoseTracker::push_depth_deferred`]), as the runtime does with one
+/// Hands every depth frame over deferred ([`DepthHandling::AfterNextTick`]), as the runtime does with one
 /// that arrives just before a tick, or with `carry_only` to be carried only
-/// ([`PoseTracker::push_depth_carried`]), as it does when its thread has fallen behind.
+/// ([`DepthHandling::CarryOnly`]), as it does when its thread has fallen behind.
 struct DeferringDriver(EventTrack6d, bool);
 
 impl PoseTracker for DeferringDriver {
@@ -286,11 +287,11 @@ impl PoseTracker for DeferringDriver {
     fn push_events(&mut self, events: &[CdEvent]) {
         self.0.push_events(events);
     }
-    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame, _handling: DepthHandling) {
         if self.1 {
-            self.0.push_depth_carried(t_us, frame);
+            self.0.push_depth(t_us, frame, DepthHandling::CarryOnly);
         } else {
-            self.0.push_depth_deferred(t_us, frame);
+            self.0.push_depth(t_us, frame, DepthHandling::AfterNextTick);
         }
     }
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
@@ -466,7 +467,7 @@ impl PoseTracker for DepthLog {
         &self.names
     }
     fn push_events(&mut self, _: &[CdEvent]) {}
-    fn push_depth(&mut self, t_us: i64, _: &mut DepthFrame) {
+    fn push_depth(&mut self, t_us: i64, _: &mut DepthFrame, _: DepthHandling) {
         self.arrivals.push((t_us, None));
     }
     fn tick(&mut self, tick: &Tick, _: &mut Vec<PoseEstimate>) {

@@ -7,12 +7,13 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use eventtrack6d::runtime::setup::recording_scene;
-use eventtrack6d::runtime::{self, Config, Hooks, build_tracker};
+use eventtrack6d::runtime::{self, Hooks, build_tracker};
 use eventtrack6d_tests::tick_fixture::{mug_and_can_recording, mug_recording, steady_tracker};
 use scene::render::{CpuRenderer, RendererKind};
 use tracker::recording::{PoseRow, parse_pose_csv};
 use tracker::track::{
-    OfflineTiming, PoseTracker, TrackerConfig, TrackerCounters, track_recording_timed,
+    DepthHandling, OfflineTiming, PoseTracker, TrackerConfig, TrackerCounters,
+    track_recording_timed,
 };
 
 /// A pushed depth frame moves into the tracker, which hands back the frame it held: the samples are never
@@ -27,11 +28,11 @@ fn a_pushed_depth_frame_moves_in_and_the_previous_one_comes_back() {
     let mut next = s.depth.clone();
     next.index = held + 1;
     let samples = next.depth_m.as_ptr();
-    s.tracker.push_depth(t_us, &mut next);
+    s.tracker.push_depth(t_us, &mut next, DepthHandling::Now);
     assert_eq!(next.index, held, "the frame the replay left in the tracker");
     assert_eq!(next.depth_m.len(), (next.width * next.height) as usize);
     assert_ne!(next.depth_m.as_ptr(), samples);
-    s.tracker.push_depth(t_us, &mut next);
+    s.tracker.push_depth(t_us, &mut next, DepthHandling::Now);
     assert_eq!(next.index, held + 1);
     assert_eq!(
         next.depth_m.as_ptr(),
@@ -200,6 +201,7 @@ fn compare_replay_with_offline(
         RendererKind::Cpu,
         &TrackerConfig::default(),
         &scene,
+        &rec.meta.trigger.timeline_config(),
     )
     .unwrap();
     let names = tracker.objects().to_vec();
@@ -259,7 +261,7 @@ enabled = false
         rec_dir.display(),
         out_dir.display()
     );
-    let config = Config::from_toml(&toml, "replay.toml").unwrap();
+    let config = runtime::config::from_toml(&toml, "replay.toml").unwrap();
     let summary = runtime::run(&config, Hooks::default()).expect("the replay failed");
     assert_eq!(summary.queue.dropped_events, 0);
     let csv = std::fs::read_to_string(summary.outputs.csv.clone().unwrap()).unwrap();

@@ -9,7 +9,7 @@
 
 use drivers::recording::Recording;
 use eventtrack6d::publish::ros2::{self, Attachment, decode_pose_stamped};
-use eventtrack6d::runtime::{self, Config, Hooks, StopFlag};
+use eventtrack6d::runtime::{self, Hooks, StopFlag};
 use eventtrack6d_tests::dbc::{
     DbcDecoder, DbcPoseReader, check_candump_against_csv, parse_candump_line,
 };
@@ -106,7 +106,7 @@ candump_log = "poses.candump.log"
     );
     // congestion_control = "block": the test counts every sample, so delivery must be loss-free even when CI is busy
     // (with the default "drop" a starved machine once lost 4 of 72 samples here; the publisher counted them sent).
-    let config = Config::from_toml(&toml, "e2e.toml").unwrap();
+    let config = runtime::config::from_toml(&toml, "e2e.toml").unwrap();
 
     // The runtime announces that its sinks are up, then waits until the subscriber is connected.
     let (ready_tx, ready_rx) = mpsc::channel::<()>();

@@ -10,6 +10,7 @@ use eventtrack6d_tests::tick_fixture::{mug_recording, steady_tracker_of};
 use scene::render::CpuRenderer;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use tracker::track::DepthHandling;
 use tracker::track::{PoseTracker, TrackerConfig, TrackerCounters, TrackingMethod};
 
 struct Counting;
@@ -64,8 +65,11 @@ fn allocations_of_steady_ticks(
     depth_tick.depth_frame = Some(s.depth.index);
     for _ in 0..10 {
         s.tracker.push_events(&events);
-        s.tracker
-            .push_depth(depth_tick.t_us - depth_late_us, &mut s.depth);
+        s.tracker.push_depth(
+            depth_tick.t_us - depth_late_us,
+            &mut s.depth,
+            DepthHandling::Now,
+        );
         out.clear();
         s.tracker.tick(&depth_tick, &mut out);
         s.tracker.prepare_next_tick();
@@ -78,8 +82,11 @@ fn allocations_of_steady_ticks(
     for k in 0..10 {
         s.tracker.push_events(&events);
         if k % 4 == 0 {
-            s.tracker
-                .push_depth(depth_tick.t_us - depth_late_us, &mut s.depth);
+            s.tracker.push_depth(
+                depth_tick.t_us - depth_late_us,
+                &mut s.depth,
+                DepthHandling::Now,
+            );
             out.clear();
             s.tracker.tick(&depth_tick, &mut out);
         } else {
@@ -128,10 +135,14 @@ fn allocations_of_retracking_ticks(rec: &Recording, deferred: bool) -> (usize, T
             // The frame exposed three ticks ago (25 ms) arrives now.
             if deferred {
                 // Carried at this tick, tracked again in `prepare_next_tick`.
-                s.tracker
-                    .push_depth_deferred(tick_at(k - 3).t_us, &mut s.depth);
+                s.tracker.push_depth(
+                    tick_at(k - 3).t_us,
+                    &mut s.depth,
+                    DepthHandling::AfterNextTick,
+                );
             } else {
-                s.tracker.push_depth(tick_at(k - 3).t_us, &mut s.depth);
+                s.tracker
+                    .push_depth(tick_at(k - 3).t_us, &mut s.depth, DepthHandling::Now);
             }
         }
         out.clear();

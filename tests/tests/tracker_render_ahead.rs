@@ -65,8 +65,15 @@ fn replay_two_objects(prefetch: bool) -> (Vec<(i64, usize, [u64; 7])>, TrackerCo
         object_threads: 2,
         ..TrackerConfig::default()
     };
-    let mut tracker =
-        build_tracker("eventtrack6d", RendererKind::Cpu, &config, &scene).expect("tracker");
+    let timeline = rec.meta.trigger.timeline_config();
+    let mut tracker = build_tracker(
+        "eventtrack6d",
+        RendererKind::Cpu,
+        &config,
+        &scene,
+        &timeline,
+    )
+    .expect("tracker");
     let mut out = Vec::new();
     track_recording(
         &rec,

@@ -12,6 +12,8 @@ mod packaging;
 mod preview;
 pub(crate) mod tableware;
 pub mod texture;
+
+pub use texture::TEXTURE_SIZE;
 mod tools;
 mod write;
 
@@ -23,9 +25,6 @@ use image::RgbImage;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use scene::mesh::{Material, Mesh, MeshError, MeshParts, ObjectInfo, Symmetry, Texture};
 use std::sync::Arc;
-
-/// Side of every object's texture atlas, texels.
-pub const TEXTURE_SIZE: u32 = 512;
 
 /// The categories of the library.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]

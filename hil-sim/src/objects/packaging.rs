@@ -1,8 +1,7 @@
 //! Packaging: printed boxes, a food can and a squeeze bottle (cuboids and surfaces of revolution).
 
-use super::TEXTURE_SIZE;
 use super::builder::{MeshBuilder, UvRect};
-use super::texture::{Canvas, Colour, checker, fbm, mix, shade, stripe, text_lines};
+use super::texture::{Canvas, Colour, TEXTURE_SIZE, checker, fbm, mix, shade, stripe, text_lines};
 use image::RgbImage;
 use nalgebra::{Isometry3, Vector3};
 use rand::{Rng, SeedableRng};

@@ -1,9 +1,8 @@
 //! Tableware and stationery: mug, bowl, wine glass and marker (surfaces of revolution, a swept handle).
 
-use super::TEXTURE_SIZE;
 use super::builder::{MeshBuilder, UvRect};
 use super::packaging::{INK, PAPER, SEGMENTS, pick_colour};
-use super::texture::{Canvas, Colour, checker, fbm, mix, shade, stripe, text_lines};
+use super::texture::{Canvas, Colour, TEXTURE_SIZE, checker, fbm, mix, shade, stripe, text_lines};
 use image::RgbImage;
 use nalgebra::Isometry3;
 use rand::{Rng, SeedableRng};

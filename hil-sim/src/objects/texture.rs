@@ -7,6 +7,9 @@ use image::{Rgb, RgbImage};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+/// Side of every object's texture atlas, texels.
+pub const TEXTURE_SIZE: u32 = 512;
+
 /// An sRGB colour, components in `[0, 1]`.
 pub type Colour = [f32; 3];
 

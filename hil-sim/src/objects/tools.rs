@@ -1,8 +1,7 @@
 //! Elongated and articulated shapes: banana, hammer, spatula and drill (swept tubes, lathes and cuboids).
 
-use super::TEXTURE_SIZE;
 use super::builder::{MeshBuilder, UvRect};
-use super::texture::{Canvas, Colour, fbm, mix, shade, stripe, text_lines};
+use super::texture::{Canvas, Colour, TEXTURE_SIZE, fbm, mix, shade, stripe, text_lines};
 use image::RgbImage;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};

@@ -17,6 +17,7 @@ use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use scene::render::CpuRenderer;
 use std::path::PathBuf;
 use tracker::recording::{recording_object, recording_rig};
+use tracker::track::DepthHandling;
 use tracker::track::{
     EventTrack6d, PoseEstimate, PoseTracker, TrackerConfig, TrackingMethod, track_recording,
 };
@@ -131,9 +132,9 @@ impl PoseTracker for Probe {
     fn push_events(&mut self, events: &[CdEvent]) {
         self.inner.push_events(events);
     }
-    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame) {
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame, handling: DepthHandling) {
         self.depth_pending = true;
-        self.inner.push_depth(t_us, frame);
+        self.inner.push_depth(t_us, frame, handling);
     }
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
         let truth = self.gt_at(tick.t_us);
@@ -214,7 +215,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "--params" => {
                 let p = args.next().ok_or("--params needs a file")?;
                 base = toml::from_str(&std::fs::read_to_string(p)?)?;
-                base.validate()?;
+                tracker::track::validate(&base)?;
             }
             "--lag-fraction" => lag_fraction = args.next().ok_or("--lag-fraction F")?.parse()?,
             "--dump" => {

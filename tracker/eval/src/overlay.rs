@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use tracker::recon::EventSurface;
 use tracker::recording::{PoseRecord, recording_object, recording_rig};
-use tracker::track::{PoseEstimate, PoseTracker, TrackingState, track_recording};
+use tracker::track::{DepthHandling, PoseEstimate, PoseTracker, TrackingState, track_recording};
 
 /// Draws overlays with its own CPU renderer (the tracker's renderer stays untouched).
 pub struct OverlayRenderer {
@@ -189,7 +189,13 @@ impl PoseTracker for PosePlayback {
     fn push_events(&mut self, events: &[drivers::event::CdEvent]) {
         self.surface.integrate(events);
     }
-    fn push_depth(&mut self, _t_us: i64, _frame: &mut drivers::recording::DepthFrame) {}
+    fn push_depth(
+        &mut self,
+        _t_us: i64,
+        _frame: &mut drivers::recording::DepthFrame,
+        _handling: DepthHandling,
+    ) {
+    }
     fn tick(&mut self, tick: &drivers::timeline::Tick, out: &mut Vec<PoseEstimate>) {
         for k in 0..self.names.len() {
             if let Some(e) = self.pose_at(k, tick.t_us) {

@@ -1,7 +1,7 @@
 //! When the tracker works on a late depth frame. A late frame makes the tracker track the ticks since its
 //! exposure again when it arrives ([`tracker::track::TrackerConfig::retrack_late_depth`]); a frame that arrives
 //! just before a tick would make that tick wait for the work. In a real-time run such a frame is handed over
-//! deferred ([`tracker::track::PoseTracker::push_depth_deferred`]): the tick uses it the cheap way (carried from
+//! deferred ([`tracker::track::DepthHandling::AfterNextTick`]): the tick uses it the cheap way (carried from
 //! its exposure) and the tracker tracks again once the tick's poses are out.
 
 use std::time::Duration;
@@ -112,7 +112,7 @@ mod tests {
     use nalgebra::Isometry3;
     use std::sync::{Arc, Mutex};
     use std::time::Instant;
-    use tracker::track::{PoseEstimate, PoseTracker, TrackingState};
+    use tracker::track::{DepthHandling, PoseEstimate, PoseTracker, TrackingState};
 
     /// A tracker whose work on a late depth frame takes 5 ms, at arrival or after the next tick when deferred;
     /// it records how each frame was handed over.
@@ -127,16 +127,18 @@ mod tests {
             &self.names
         }
         fn push_events(&mut self, _: &[CdEvent]) {}
-        fn push_depth(&mut self, _: i64, _: &mut DepthFrame) {
-            self.handed.lock().unwrap().push("at arrival");
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        fn push_depth_deferred(&mut self, _: i64, _: &mut DepthFrame) {
-            self.handed.lock().unwrap().push("deferred");
-            self.pending = true;
-        }
-        fn push_depth_carried(&mut self, _: i64, _: &mut DepthFrame) {
-            self.handed.lock().unwrap().push("carried only");
+        fn push_depth(&mut self, _: i64, _: &mut DepthFrame, handling: DepthHandling) {
+            match handling {
+                DepthHandling::Now => {
+                    self.handed.lock().unwrap().push("at arrival");
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+                DepthHandling::AfterNextTick => {
+                    self.handed.lock().unwrap().push("deferred");
+                    self.pending = true;
+                }
+                DepthHandling::CarryOnly => self.handed.lock().unwrap().push("carried only"),
+            }
         }
         fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
             out.push(PoseEstimate {

@@ -222,7 +222,7 @@ pub struct Health {
     pub depth_frames_deferred: u64,
     /// Depth frames that reached the tracker thread older than the tracker uses (`max_depth_age_ms`).
     pub depth_frames_too_old: u64,
-    /// Times a trigger outage held more events than [`super::pulse_hold::MAX_OVERDUE_EVENTS`], which were then
+    /// Times a trigger outage held more events than [`tracker::track::MAX_OVERDUE_EVENTS`], which were then
     /// handed to the tracker before the ticks the timeline later placed in the gap.
     pub event_hold_overflows: u64,
     /// Late depth frames handed over to be carried only, because the tracker thread had fallen behind

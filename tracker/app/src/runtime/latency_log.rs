@@ -2,7 +2,7 @@
 //! tick in the summary's p99 or max can be found and explained. Written on the tracker thread through a buffer;
 //! steady state allocates nothing.
 
-use super::RuntimeError;
+use super::error::RuntimeError;
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};

@@ -10,10 +10,7 @@ use tracker::track::{MAX_DEPTH_AGE_LIMIT_MS, PoseEstimate, PoseTracker};
 /// configured to use ([`MAX_DEPTH_AGE_LIMIT_MS`]).
 const REMEMBERED_TICKS: usize = 64;
 
-/// The tracker starts tracking again from the tick within this much of a frame's exposure (half a 120 Hz
-/// period), so that tick is revised too, microseconds.
-const EXPOSURE_TICK_US: i64 = 4_200;
-
+// At 120 Hz (8333 us ticks) and slower, that covers the oldest depth frame plus the tick it is used at.
 const _: () =
     assert!(REMEMBERED_TICKS as f64 * 8_333.0 >= MAX_DEPTH_AGE_LIMIT_MS * 1_000.0 + 8_333.0);
 
@@ -26,8 +23,6 @@ pub(super) struct PoseRevisions {
     objects: usize,
     /// Scratch for the revised estimates (kept between calls: no allocation in steady state).
     revised: Vec<PoseEstimate>,
-    /// The tracker's count of late frames it tracked again from, when last looked at.
-    retracked_frames: u64,
     /// Revised estimates handed to the sinks so far.
     handed: u64,
 }
@@ -40,7 +35,6 @@ impl PoseRevisions {
             published: VecDeque::with_capacity(capacity),
             objects: objects.max(1),
             revised: Vec::with_capacity(capacity),
-            retracked_frames: 0,
             handed: 0,
         }
     }
@@ -62,26 +56,17 @@ impl PoseRevisions {
         }
     }
 
-    /// Looks whether `tracker` tracked ticks again since the last look, from the depth frame exposed at
-    /// `exposure_us`; if so, hands the revised estimate of every published tick since the exposure to `sinks`.
-    /// Only the pose is revised: quality and state stay as published (the tracker keeps no per-tick quality).
-    /// Returns how many estimates were handed.
-    pub(super) fn after_depth(
+    /// Hands `sinks` the revised estimate of every published tick at or after `since_us`, the earliest tick the
+    /// tracker says it revised ([`PoseTracker::take_revision`]). Only the pose is revised: quality and state stay
+    /// as published (the tracker keeps no per-tick quality). Returns how many estimates were handed.
+    pub(super) fn revise(
         &mut self,
-        exposure_us: i64,
+        since_us: i64,
         tracker: &dyn PoseTracker,
         sinks: &mut [Box<dyn PoseSink>],
     ) -> usize {
-        let Some(counters) = tracker.tracker_counters() else {
-            return 0;
-        };
-        if counters.late_frames_retracked == self.retracked_frames {
-            return 0;
-        }
-        self.retracked_frames = counters.late_frames_retracked;
         self.revised.clear();
-        let since = exposure_us.saturating_sub(EXPOSURE_TICK_US);
-        for e in self.published.iter().filter(|e| e.t_us >= since) {
+        for e in self.published.iter().filter(|e| e.t_us >= since_us) {
             if let Some(now) = tracker.pose_at(e.object, e.t_us) {
                 self.revised.push(PoseEstimate {
                     pose: now.pose,
@@ -113,13 +98,14 @@ mod tests {
     use drivers::timeline::Tick;
     use nalgebra::{Isometry3, Translation3};
     use std::sync::{Arc, Mutex};
-    use tracker::track::{TrackerCounters, TrackingState};
+    use tracker::track::{DepthHandling, TrackingState};
 
-    /// Two objects; `pose_at` answers x = the time in seconds (+1 once "tracked again"); the counters say how
-    /// many late frames it tracked again from.
+    /// Two objects; `pose_at` answers x = the time in seconds (+1 once "tracked again"); a depth frame makes it
+    /// say it revised the ticks from half a period before the frame's exposure (the tick nearest it) on.
     struct Retracking {
         names: Vec<String>,
         retracked: u64,
+        revised_since: Option<i64>,
     }
 
     impl PoseTracker for Retracking {
@@ -127,8 +113,12 @@ mod tests {
             &self.names
         }
         fn push_events(&mut self, _: &[CdEvent]) {}
-        fn push_depth(&mut self, _: i64, _: &mut DepthFrame) {
+        fn push_depth(&mut self, t_us: i64, _: &mut DepthFrame, _: DepthHandling) {
             self.retracked += 1;
+            self.revised_since = Some(t_us - 4_167);
+        }
+        fn take_revision(&mut self) -> Option<i64> {
+            self.revised_since.take()
         }
         fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
             for object in 0..self.names.len() {
@@ -153,12 +143,6 @@ mod tests {
                 state: TrackingState::Tracking,
             })
         }
-        fn tracker_counters(&self) -> Option<TrackerCounters> {
-            Some(TrackerCounters {
-                late_frames_retracked: self.retracked,
-                ..TrackerCounters::default()
-            })
-        }
     }
 
     struct Revisions(Arc<Mutex<Vec<PoseEstimate>>>);
@@ -179,10 +163,11 @@ mod tests {
     }
 
     #[test]
-    fn ticks_since_the_exposure_are_revised_only_when_the_tracker_tracked_again() {
+    fn ticks_since_the_revision_are_revised_with_the_trackers_poses() {
         let mut tracker = Retracking {
             names: vec!["a".into(), "b".into()],
             retracked: 0,
+            revised_since: None,
         };
         let got = Arc::new(Mutex::new(Vec::new()));
         let mut sinks: Vec<Box<dyn PoseSink>> = vec![Box::new(Revisions(got.clone()))];
@@ -199,8 +184,8 @@ mod tests {
             revisions.published(&[published(t, 0), published(t, 1)]);
         }
         // Nothing tracked again: nothing revised.
-        assert_eq!(revisions.after_depth(600_000, &tracker, &mut sinks), 0);
-        // Tracked again from the frame exposed at 601_000 us, 2.5 ms after the tick at 600_476 (where the tracker
+        assert_eq!(tracker.take_revision(), None);
+        // Tracked again from the frame exposed at 601_000 us, 0.5 ms after the tick at 600_476 (where the tracker
         // starts): that tick and the three after it (the last of the 64 remembered), each object once.
         let mut frame = DepthFrame {
             index: 9,
@@ -208,8 +193,9 @@ mod tests {
             height: 0,
             depth_m: Vec::new(),
         };
-        tracker.push_depth(601_000, &mut frame);
-        assert_eq!(revisions.after_depth(601_000, &tracker, &mut sinks), 8);
+        tracker.push_depth(601_000, &mut frame, DepthHandling::Now);
+        let since = tracker.take_revision().unwrap();
+        assert_eq!(revisions.revise(since, &tracker, &mut sinks), 8);
         let got = got.lock().unwrap().clone();
         let times: Vec<(usize, i64)> = got.iter().map(|e| (e.object, e.t_us)).collect();
         assert_eq!(
@@ -232,8 +218,8 @@ mod tests {
             (0.25, TrackingState::Degraded)
         );
         assert_eq!(revisions.handed(), 8);
-        // The same counters again: no second revision.
-        assert_eq!(revisions.after_depth(601_000, &tracker, &mut sinks), 0);
+        // Taken once: no second revision.
+        assert_eq!(tracker.take_revision(), None);
         // A clock that went back forgets the ticks after it; 64 ticks of two objects are kept at most.
         revisions.published(&[published(300_000, 0), published(300_000, 1)]);
         assert!(revisions.published.iter().all(|e| e.t_us <= 300_000));
@@ -256,6 +242,7 @@ mod tests {
         let tracker = Retracking {
             names: names.clone(),
             retracked: 0,
+            revised_since: None,
         };
         let worker = Worker::new(
             Box::new(tracker),

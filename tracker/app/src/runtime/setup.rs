@@ -1,8 +1,8 @@
 //! Building the pieces of a run from a configuration: the scene (cameras, objects, first poses), the tracker
 //! ([`build_tracker`]), the source and the sinks.
 
-use super::RuntimeError;
 use super::config::{Config, ObjectConfig, SourceKind};
+use super::error::RuntimeError;
 use super::latency_log::LatencyLog;
 use super::replay::ReplaySource;
 use super::source::{Source, SourceError};
@@ -49,7 +49,7 @@ pub struct TrackerScene {
     pub recording: Option<Recording>,
 }
 
-/// Builds the tracker named `method` for `scene`.
+/// Builds the tracker named `method` for `scene`, triggered on `timeline`.
 ///
 /// `eventtrack6d` is the tracker; `depth30` and `events-only` its baselines; `static` holds every object's first
 /// pose (the plumbing test and benchmark floor).
@@ -58,6 +58,7 @@ pub fn build_tracker(
     renderer: RendererKind,
     parameters: &TrackerConfig,
     scene: &TrackerScene,
+    timeline: &TimelineConfig,
 ) -> Result<Box<dyn PoseTracker>, RuntimeError> {
     match method {
         "static" => Ok(Box::new(HoldPoseTracker::new(
@@ -72,7 +73,7 @@ pub fn build_tracker(
                 RuntimeError::Tracker(format!("tracker.method `{name}` is not known"))
             })?;
             Ok(Box::new(build_eventtrack6d(
-                method, renderer, parameters, scene,
+                method, renderer, parameters, scene, timeline,
             )?))
         }
         other => Err(RuntimeError::Tracker(format!(
@@ -83,14 +84,16 @@ pub fn build_tracker(
 }
 
 /// The EventTrack6D tracker (or one of its baselines) for `scene`, on `parameters` with the method's preset on
-/// top, rendering with `renderer`.
+/// top, rendering with `renderer`, triggered on `timeline`.
 fn build_eventtrack6d(
     method: TrackingMethod,
     renderer: RendererKind,
     parameters: &TrackerConfig,
     scene: &TrackerScene,
+    timeline: &TimelineConfig,
 ) -> Result<EventTrack6d, RuntimeError> {
-    let rig = tracking_rig(&scene.rig).map_err(|e| RuntimeError::Tracker(e.to_string()))?;
+    let rig =
+        tracking_rig(&scene.rig, timeline).map_err(|e| RuntimeError::Tracker(e.to_string()))?;
     let mut objects = Vec::with_capacity(scene.objects.len());
     for o in &scene.objects {
         let loaded = load_obj(&o.mesh, &MeshLoadOptions::default())

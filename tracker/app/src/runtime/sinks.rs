@@ -2,13 +2,16 @@
 //! SocketCAN).
 
 use super::config::Config;
+use super::error::RuntimeError;
 use super::setup::OutputPaths;
 use super::worker::SharedSink;
-use super::{RuntimeError, StatusPut};
 use crate::publish::zenoh::ZenohPosePublisher;
 use crate::publish::{PoseSink, PublishError};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
+
+/// Puts a status document (JSON bytes) somewhere (the zenoh status key).
+pub type StatusPut = Box<dyn FnMut(&[u8]) -> Result<(), PublishError> + Send>;
 
 /// The network sinks of a run.
 #[derive(Default)]

@@ -1,18 +1,18 @@
-//! The tracker thread: takes ingest in order, turns trigger edges into ticks through the trigger timeline, drives
-//! the tracker with exactly the events up to each tick ([`PulseHold`]), hands every tick's estimates to each sink, and measures latency (edge decoded -> after each sink,
-//! and after all sinks). Steady state allocates nothing: buffers are reused and event batches recycled.
+//! The tracker thread: takes ingest in order, turns trigger edges into ticks and feeds the tracker exactly the
+//! events up to each tick through the [`TickDriver`] the offline driver runs on too, hands every tick's estimates
+//! to each sink, and measures latency (edge decoded -> after each sink, and after all sinks). Steady state
+//! allocates nothing: buffers are reused and event batches recycled.
 
 use super::depth_arrival::DepthArrival;
 use super::health::Health;
 use super::latency_log::{LatencyLog, TickTiming};
-use super::pulse_hold::PulseHold;
 use super::queue::{Ingest, IngestQueue};
 use super::revision::PoseRevisions;
 use crate::publish::{PoseSink, TickPoses};
-use drivers::timeline::{TimelineConfig, TriggerTimeline};
+use drivers::timeline::TimelineConfig;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
-use tracker::track::{PoseEstimate, PoseTracker};
+use tracker::track::{DepthHandling, PoseEstimate, PoseTracker, TickDriver};
 
 /// A pose sink shared between the tracker thread and another task (e.g. the status timer of the zenoh sink).
 pub struct SharedSink<S: PoseSink> {
@@ -94,8 +94,7 @@ pub struct WorkerEnd {
 pub struct Worker {
     tracker: Box<dyn PoseTracker>,
     sinks: Vec<Box<dyn PoseSink>>,
-    timeline: TriggerTimeline,
-    hold: PulseHold,
+    driver: TickDriver,
     queue: Arc<IngestQueue>,
     health: Arc<Mutex<Health>>,
     objects: Vec<String>,
@@ -121,8 +120,6 @@ pub struct Worker {
     reported_old_depth: bool,
     /// Published ticks, for handing the sinks what the tracker revises of them.
     revisions: PoseRevisions,
-    /// Exposure of the latest depth frame handed to the tracker.
-    latest_exposure_us: Option<i64>,
 }
 
 impl Worker {
@@ -142,8 +139,7 @@ impl Worker {
             objects,
             tracker,
             sinks,
-            timeline: TriggerTimeline::new(timeline),
-            hold: PulseHold::new(timeline.channel),
+            driver: TickDriver::new(timeline),
             queue,
             health,
             sink_latency: vec![Duration::ZERO; n],
@@ -159,7 +155,6 @@ impl Worker {
             depth_age_limit_us: None,
             reported_old_depth: false,
             revisions: PoseRevisions::new(objects_count),
-            latest_exposure_us: None,
         }
     }
 
@@ -172,7 +167,7 @@ impl Worker {
     /// In a real-time run (`enabled`), hands a late depth frame over deferred when the tracker's work on it is
     /// expected to run into the next tick ([`DepthArrival`], [`PoseTracker::push_depth_deferred`]).
     pub fn with_depth_deferral(mut self, enabled: bool) -> Self {
-        let period_us = self.timeline.config().period_us();
+        let period_us = self.driver.timeline_config().period_us();
         self.arrival = DepthArrival::new(enabled, period_us);
         self
     }
@@ -215,12 +210,12 @@ impl Worker {
                         self.stream_us =
                             Some(self.stream_us.map_or(last.t_us, |t| t.max(last.t_us)));
                     }
-                    self.hold.events(&events, self.tracker.as_mut());
+                    self.driver.events(&events, self.tracker.as_mut());
                     let n = events.len() as u64;
                     self.queue.recycle(events);
                     let mut h = self.health();
                     h.events += n;
-                    h.event_hold_overflows = self.hold.overflows();
+                    h.event_hold_overflows = self.driver.hold_overflows();
                 }
                 Ingest::Depth { t_us, frame } => {
                     self.check_depth_age(t_us);
@@ -228,28 +223,18 @@ impl Worker {
                 }
                 Ingest::Trigger { edge, decoded_at } => {
                     self.stream_us = Some(self.stream_us.map_or(edge.t_us, |t| t.max(edge.t_us)));
-                    self.timeline.push(edge);
-                    while let Some(tick) = self.timeline.pop_tick() {
-                        self.hold.release_until(tick.t_us, self.tracker.as_mut());
+                    self.driver.edge(edge, self.tracker.as_mut());
+                    while let Some(tick) = self.driver.next_tick(self.tracker.as_mut()) {
                         self.tick(&tick, decoded_at);
                     }
-                    self.hold.edge(&edge, self.tracker.as_mut());
-                    // The jitter tolerance early: a tick the timeline places in a gap lies halfway between its
-                    // neighbours, so before the schedule when the pulse after the gap comes early (by up to twice
-                    // the tolerance before it counts as jittered). Wider, the hold would delay more events to the
-                    // tick's own latency.
-                    let margin = self.timeline.config().jitter_tolerance_us;
-                    self.hold
-                        .set_due(self.timeline.next_pulse_due_us().map(|due| due - margin));
                 }
                 Ingest::End => {
-                    self.timeline.finish();
+                    self.driver.finish();
                     let now = Instant::now();
-                    while let Some(tick) = self.timeline.pop_tick() {
-                        self.hold.release_until(tick.t_us, self.tracker.as_mut());
+                    while let Some(tick) = self.driver.next_tick(self.tracker.as_mut()) {
                         self.tick(&tick, now);
                     }
-                    self.hold.release_all(self.tracker.as_mut());
+                    self.driver.release_held(self.tracker.as_mut());
                     break;
                 }
             }
@@ -278,7 +263,7 @@ impl Worker {
 
     fn sync_counters(&mut self) {
         let queue = self.queue.counters();
-        let timeline = *self.timeline.counters();
+        let timeline = *self.driver.timeline_counters();
         let mut h = self.health.lock().unwrap_or_else(|p| p.into_inner());
         h.queue = queue;
         h.timeline = timeline;
@@ -321,7 +306,6 @@ impl Worker {
     /// when its work would delay the next tick, else at once ([`DepthArrival`]); records the work it took.
     fn hand_over_depth(&mut self, t_us: i64, mut frame: Box<drivers::recording::DepthFrame>) {
         let start = Instant::now();
-        self.latest_exposure_us = Some(t_us);
         let shed = self
             .arrival
             .should_shed(t_us, self.last_tick_us, self.last_waited);
@@ -330,20 +314,23 @@ impl Worker {
                 .arrival
                 .should_defer(t_us, self.stream_us, self.last_tick_us);
         let work = if shed {
-            self.tracker.push_depth_carried(t_us, &mut frame);
+            self.tracker
+                .push_depth(t_us, &mut frame, DepthHandling::CarryOnly);
             self.arrival.count_shed();
             Some(start.elapsed())
         } else if defer {
-            self.tracker.push_depth_deferred(t_us, &mut frame);
+            self.tracker
+                .push_depth(t_us, &mut frame, DepthHandling::AfterNextTick);
             self.arrival.count_deferred();
             // Its work is measured after the next tick ([`Self::tick`]).
             self.deferred_depth_us = Some(t_us);
             None
         } else {
-            self.tracker.push_depth(t_us, &mut frame);
+            self.tracker
+                .push_depth(t_us, &mut frame, DepthHandling::Now);
             let work = start.elapsed();
             self.arrival.record(t_us, self.last_tick_us, work);
-            self.revise_published(t_us);
+            self.revise_published();
             Some(work)
         };
         let mut h = self.health();
@@ -355,12 +342,14 @@ impl Worker {
         }
     }
 
-    /// Hands the sinks the estimates the tracker revised if it tracked published ticks again from the frame
-    /// exposed at `exposure_us`, and counts them.
-    fn revise_published(&mut self, exposure_us: i64) {
+    /// Hands the sinks the estimates of published ticks that the tracker says it revised, and counts them.
+    fn revise_published(&mut self) {
+        let Some(since_us) = self.tracker.take_revision() else {
+            return;
+        };
         if self
             .revisions
-            .after_depth(exposure_us, &*self.tracker, &mut self.sinks)
+            .revise(since_us, &*self.tracker, &mut self.sinks)
             > 0
         {
             self.health().poses_revised = self.revisions.handed();
@@ -396,7 +385,7 @@ impl Worker {
         let now = Instant::now();
         let first = *self.first_tick_wall.get_or_insert(now);
         let queue = self.queue.counters();
-        let timeline = *self.timeline.counters();
+        let timeline = *self.driver.timeline_counters();
         let mut h = self.health.lock().unwrap_or_else(|p| p.into_inner());
         h.ticks += 1;
         h.poses += self.estimates.len() as u64;
@@ -425,9 +414,7 @@ impl Worker {
         drop(h);
         self.revisions.published(&self.estimates);
         // A frame the tracker kept for this tick may have made it track the ticks before again.
-        if let Some(t_us) = self.latest_exposure_us {
-            self.revise_published(t_us);
-        }
+        self.revise_published();
         self.last_tick_us = Some(tick.t_us);
         self.last_waited = tick_start.saturating_duration_since(decoded_at);
         // The poses are out: start the next tick's work (its renders, and tracking again for a frame deferred)
@@ -438,7 +425,7 @@ impl Worker {
             let work = prepare_start.elapsed();
             self.arrival.record(t_us, self.last_tick_us, work);
             self.health().depth_arrival.record(work);
-            self.revise_published(t_us);
+            self.revise_published();
         }
         if let Some(log) = &mut self.latency_log {
             log.record(&TickTiming {

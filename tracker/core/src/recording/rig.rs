@@ -3,10 +3,10 @@
 
 use super::SetupError;
 use crate::recon::DepthRig;
-use crate::track::TrackingRig;
+use crate::track::{TickClock, TrackingRig};
 use drivers::event::{EventSink, TriggerEdge};
 use drivers::recording::{CameraIntrinsics, CameraRig, Recording, RecordingError};
-use drivers::timeline::{Tick, TickIter};
+use drivers::timeline::{Tick, TickIter, TimelineConfig};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion};
 use scene::geometry::PinholeCamera;
 
@@ -30,20 +30,21 @@ pub fn event_from_depth(rig: &CameraRig) -> Isometry3<f64> {
     )
 }
 
-/// The tracking rig of a camera rig description (event camera, depth camera, extrinsics).
-pub fn tracking_rig(rig: &CameraRig) -> Result<TrackingRig, SetupError> {
+/// The tracking rig of a camera rig description (event camera, depth camera, extrinsics) triggered on `timeline`.
+pub fn tracking_rig(rig: &CameraRig, timeline: &TimelineConfig) -> Result<TrackingRig, SetupError> {
     Ok(TrackingRig {
         event_camera: camera_of(&rig.event_camera, "event camera")?,
         depth: DepthRig {
             camera: camera_of(&rig.depth_camera, "depth camera")?,
             event_from_depth: event_from_depth(rig),
         },
+        clock: TickClock::of(timeline),
     })
 }
 
-/// The tracking rig of a recording ([`tracking_rig`] of its rig).
+/// The tracking rig of a recording ([`tracking_rig`] of its rig and trigger schedule).
 pub fn recording_rig(rec: &Recording) -> Result<TrackingRig, SetupError> {
-    tracking_rig(&rec.rig)
+    tracking_rig(&rec.rig, &rec.meta.trigger.timeline_config())
 }
 
 struct TriggerCollector(Vec<TriggerEdge>);

@@ -9,7 +9,9 @@ use nalgebra::{Isometry3, Vector3};
 use scene::geometry::PinholeCamera;
 
 /// Parameters of the depth term.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(deny_unknown_fields, default)]
 pub struct DepthTerm {
     /// Noise model `sigma(z) = sigma_0 + sigma_z2 * z^2`, metres: constant part.

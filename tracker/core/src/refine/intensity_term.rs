@@ -16,7 +16,9 @@ use nalgebra::{Isometry3, Vector3};
 use scene::geometry::PinholeCamera;
 
 /// Parameters of the intensity-edge term.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(deny_unknown_fields, default)]
 pub struct IntensityTerm {
     /// Weight relative to the depth term; 0 switches the term off.

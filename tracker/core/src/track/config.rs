@@ -8,7 +8,7 @@ use crate::refine::{DepthTerm, EventTerm, IntensityTerm};
 use serde::{Deserialize, Serialize};
 
 /// When the depth modality is used.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "kebab-case")]
 pub enum DepthUse {
     /// `D_t` at every tick: the fresh frame at depth-exposure ticks, the carried `D_0` in between (ours).
@@ -22,7 +22,7 @@ pub enum DepthUse {
 }
 
 /// Quality thresholds that set the tracking state.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct QualityConfig {
     /// Below this quality the state is `degraded`.
@@ -73,7 +73,7 @@ impl QualityConfig {
 }
 
 /// All tracker parameters. Every field has a default; a TOML `[tracker]` table may override any of them.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct TrackerConfig {
     /// ROI output size, pixels (square).

@@ -1,7 +1,7 @@
 //! The trivial tracker: every object keeps its initial pose. Used to test the runtime's plumbing and as the
 //! `static` floor of the benchmark.
 
-use super::{PoseEstimate, PoseTracker, TrackingState};
+use super::{DepthHandling, PoseEstimate, PoseTracker, TrackingState};
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
@@ -32,7 +32,7 @@ impl PoseTracker for HoldPoseTracker {
         &self.names
     }
     fn push_events(&mut self, _events: &[CdEvent]) {}
-    fn push_depth(&mut self, _t_us: i64, _frame: &mut DepthFrame) {}
+    fn push_depth(&mut self, _t_us: i64, _frame: &mut DepthFrame, _handling: DepthHandling) {}
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>) {
         self.last_tick_us = Some(tick.t_us);
         out.extend(

@@ -5,32 +5,53 @@
 //! then the depth frame exposed at that tick (if any), then [`PoseTracker::tick`], which appends one estimate per
 //! tracked object.
 
+mod clock;
 mod config;
 mod depth_transport;
+mod drive;
 mod estimate;
 mod eventtrack;
 mod fallback_check;
 mod hold;
 mod object;
-mod offline;
 mod redetect;
 mod validate;
 
+pub use clock::TickClock;
 pub use config::{DepthUse, MAX_DEPTH_AGE_LIMIT_MS, QualityConfig, TrackerConfig, TrackingMethod};
 pub use depth_transport::DepthTransport;
+pub use drive::{
+    MAX_OVERDUE_EVENTS, OfflineStats, OfflineTiming, PulseHold, TickDriver, track_recording,
+    track_recording_timed,
+};
 pub use estimate::{PoseEstimate, ReportedState, TrackingState};
 pub use eventtrack::{EventTrack6d, TrackError, TrackedObject, TrackerCounters, TrackingRig};
 pub use fallback_check::{
     DepthFallbackCheck, FALLBACK_TRACE_HEADER, FallbackCandidate, FallbackRule, FallbackStart,
 };
 pub use hold::HoldPoseTracker;
-pub use offline::{OfflineStats, OfflineTiming, track_recording, track_recording_timed};
 pub use redetect::RedetectConfig;
-pub use validate::InvalidParameter;
+pub use validate::{InvalidParameter, validate};
 
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
+
+/// What a tracker does with a depth frame that arrives after its exposure's tick (one on time is used at its
+/// tick in every case).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DepthHandling {
+    /// Everything now: EventTrack6D tracks the ticks since the exposure again with the frame at once, so the
+    /// next tick starts from estimates as if it had come on time.
+    Now,
+    /// The next tick carries the frame from its exposure (the cheap way), and the ticks since the exposure are
+    /// tracked again once that tick's poses are out ([`PoseTracker::prepare_next_tick`]): for a frame that
+    /// arrives just before a tick, whose work would delay it.
+    AfterNextTick,
+    /// The next tick carries the frame from its exposure and nothing is tracked again: for a caller that has
+    /// fallen behind (counted in `late_frames_not_retracked`).
+    CarryOnly,
+}
 
 /// A multi-object pose tracker driven tick by tick. Implementations must not allocate per tick in steady state and
 /// must never block: the runtime calls them from the tracker thread.
@@ -39,29 +60,22 @@ pub trait PoseTracker: Send {
     fn objects(&self) -> &[String];
     /// Events in time order (non-decreasing `t_us`), all at or before the next tick.
     fn push_events(&mut self, events: &[CdEvent]);
-    /// The depth frame exposed at time `t_us` (the depth-exposure tick), in the depth camera's pixels; it may
-    /// arrive after that tick (a live depth camera's latency: EventTrack6D then tracks the ticks since the
-    /// exposure again with it, here, or uses it at the next tick, up to [`TrackerConfig::max_depth_age_ms`] after
-    /// the exposure). A tracker
-    /// that keeps the frame takes it without a copy and leaves its previous frame in `frame` (for the caller to
-    /// reuse or drop); one that does not leaves `frame` as it is.
-    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame);
-    /// Like [`Self::push_depth`] for a frame that arrives just before a tick: what the frame costs beyond that
-    /// tick's own use of it is left until [`Self::prepare_next_tick`], after the tick's poses are out
-    /// (EventTrack6D: the tick carries a late frame from its exposure, and the ticks since the exposure are
-    /// tracked again afterwards). By default the same as `push_depth`.
-    fn push_depth_deferred(&mut self, t_us: i64, frame: &mut DepthFrame) {
-        self.push_depth(t_us, frame);
-    }
-    /// Like [`Self::push_depth`] for a caller that has fallen behind: the frame is used only the cheap way, and
-    /// nothing it could cost beyond that is done (EventTrack6D: the next tick carries a late frame from its
-    /// exposure and nothing is tracked again; counted in `late_frames_not_retracked`). By default the same as
-    /// `push_depth`.
-    fn push_depth_carried(&mut self, t_us: i64, frame: &mut DepthFrame) {
-        self.push_depth(t_us, frame);
-    }
+    /// The depth frame exposed at time `t_us` (the depth-exposure tick), in the depth camera's pixels, handled as
+    /// `handling` says. It may arrive after that tick (a live depth camera's latency: EventTrack6D then tracks the
+    /// ticks since the exposure again with it, or uses it at the next tick, up to
+    /// [`TrackerConfig::max_depth_age_ms`] after the exposure). A tracker that keeps the frame takes it without a
+    /// copy and leaves its previous frame in `frame` (for the caller to reuse or drop); one that does not leaves
+    /// `frame` as it is.
+    fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame, handling: DepthHandling);
     /// Estimates every object's pose at `tick` and appends one [`PoseEstimate`] per object to `out`.
     fn tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>);
+    /// The earliest tick time (microseconds) whose estimate, already returned by [`Self::tick`], the tracker has
+    /// revised since the last call, if it did (EventTrack6D: a late depth frame made it track the ticks since its
+    /// exposure again). The revised poses are [`Self::pose_at`] those ticks; quality and state stay as returned.
+    /// Ask after `push_depth`, `tick` and `prepare_next_tick`.
+    fn take_revision(&mut self) -> Option<i64> {
+        None
+    }
     /// Work for the next tick that need not delay this tick's poses (EventTrack6D: start its renders,
     /// [`TrackerConfig::prefetch_renders`]); call it once the tick's poses are published. Skipping it changes no
     /// pose, only when the work is done.

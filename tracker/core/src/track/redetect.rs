@@ -9,7 +9,7 @@ use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Re-detection parameters (`[redetect]`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RedetectConfig {
     /// Whether an object that is `lost`, or `degraded` by more than being partly hidden, is searched for at

@@ -84,387 +84,385 @@ impl Check {
     }
 }
 
-impl TrackerConfig {
-    /// Checks every numeric parameter's range; the first offending key is reported.
-    pub fn validate(&self) -> Result<(), InvalidParameter> {
-        self.view_checks().iter().try_for_each(Check::run)?;
-        self.optimiser_checks().iter().try_for_each(Check::run)?;
-        self.motion_checks().iter().try_for_each(Check::run)?;
-        self.depth_use_checks().iter().try_for_each(Check::run)?;
-        self.event_use_checks().iter().try_for_each(Check::run)?;
-        self.depth_term_checks().iter().try_for_each(Check::run)?;
-        self.intensity_term_checks()
-            .iter()
-            .try_for_each(Check::run)?;
-        self.event_term_checks().iter().try_for_each(Check::run)?;
-        self.quality_checks().iter().try_for_each(Check::run)?;
-        self.redetect_checks().iter().try_for_each(Check::run)?;
-        Ok(())
-    }
+/// Checks every numeric parameter of `config`; the first offending key is reported.
+pub fn validate(config: &TrackerConfig) -> Result<(), InvalidParameter> {
+    view_checks(config).iter().try_for_each(Check::run)?;
+    optimiser_checks(config).iter().try_for_each(Check::run)?;
+    motion_checks(config).iter().try_for_each(Check::run)?;
+    depth_use_checks(config).iter().try_for_each(Check::run)?;
+    event_use_checks(config).iter().try_for_each(Check::run)?;
+    depth_term_checks(config).iter().try_for_each(Check::run)?;
+    intensity_term_checks(config)
+        .iter()
+        .try_for_each(Check::run)?;
+    event_term_checks(config).iter().try_for_each(Check::run)?;
+    quality_checks(config).iter().try_for_each(Check::run)?;
+    redetect_checks(config).iter().try_for_each(Check::run)?;
+    Ok(())
+}
 
-    /// The checks of the region of interest, rendering and threads, in the order they are reported.
-    fn view_checks(&self) -> [Check; 8] {
-        [
-            Check::new(
-                "roi_size",
-                f64::from(self.roi_size),
-                Rule::Within(16.0, 1024.0, "must be 16 to 1024 pixels"),
-            ),
-            Check::new(
-                "roi_scale",
-                self.roi_scale,
-                Rule::Within(0.5, 4.0, "must be 0.5 to 4 diameters"),
-            ),
-            Check::new(
-                "object_threads",
-                self.object_threads as f64,
-                Rule::AtMost(256.0, "must be 0 (one per core) to 256"),
-            ),
-            Check::new(
-                "render_mesh_simplify_above",
-                self.render_mesh_simplify_above as f64,
-                Rule::AtMost(100_000_000.0, "must be at most 100000000 triangles"),
-            ),
-            Check::new(
-                "render_mesh_tolerance_px",
-                self.render_mesh_tolerance_px,
-                Rule::Within(0.0, 2.0, "must be 0 (the mesh as loaded) to 2 ROI pixels"),
-            ),
-            Check::new(
-                "max_surface_points",
-                self.max_surface_points as f64,
-                Rule::Positive("must be at least 1"),
-            ),
-            Check::new(
-                "max_contour_points",
-                self.max_contour_points as f64,
-                Rule::Positive("must be at least 1"),
-            ),
-            Check::new(
-                "max_event_points",
-                self.max_event_points as f64,
-                Rule::Positive("must be at least 1"),
-            ),
-        ]
-    }
+/// The checks of the region of interest, rendering and threads, in the order they are reported.
+fn view_checks(config: &TrackerConfig) -> [Check; 8] {
+    [
+        Check::new(
+            "roi_size",
+            f64::from(config.roi_size),
+            Rule::Within(16.0, 1024.0, "must be 16 to 1024 pixels"),
+        ),
+        Check::new(
+            "roi_scale",
+            config.roi_scale,
+            Rule::Within(0.5, 4.0, "must be 0.5 to 4 diameters"),
+        ),
+        Check::new(
+            "object_threads",
+            config.object_threads as f64,
+            Rule::AtMost(256.0, "must be 0 (one per core) to 256"),
+        ),
+        Check::new(
+            "render_mesh_simplify_above",
+            config.render_mesh_simplify_above as f64,
+            Rule::AtMost(100_000_000.0, "must be at most 100000000 triangles"),
+        ),
+        Check::new(
+            "render_mesh_tolerance_px",
+            config.render_mesh_tolerance_px,
+            Rule::Within(0.0, 2.0, "must be 0 (the mesh as loaded) to 2 ROI pixels"),
+        ),
+        Check::new(
+            "max_surface_points",
+            config.max_surface_points as f64,
+            Rule::Positive("must be at least 1"),
+        ),
+        Check::new(
+            "max_contour_points",
+            config.max_contour_points as f64,
+            Rule::Positive("must be at least 1"),
+        ),
+        Check::new(
+            "max_event_points",
+            config.max_event_points as f64,
+            Rule::Positive("must be at least 1"),
+        ),
+    ]
+}
 
-    /// The checks of the optimiser and its prior, in the order they are reported.
-    fn optimiser_checks(&self) -> [Check; 6] {
-        [
-            Check::new(
-                "iterations",
-                f64::from(self.iterations),
-                Rule::AtMost(100.0, "must be at most 100"),
-            ),
-            Check::new("damping", self.damping, Rule::NonNegative),
-            Check::new(
-                "max_step_rotation_deg",
-                self.max_step_rotation_deg,
-                Rule::Positive(POSITIVE),
-            ),
-            Check::new(
-                "max_step_translation_diameters",
-                self.max_step_translation_diameters,
-                Rule::Positive(POSITIVE),
-            ),
-            Check::new(
-                "prior_translation_m",
-                self.prior_translation_m,
-                Rule::Positive(POSITIVE),
-            ),
-            Check::new(
-                "prior_rotation_deg",
-                self.prior_rotation_deg,
-                Rule::Positive(POSITIVE),
-            ),
-        ]
-    }
+/// The checks of the optimiser and its prior, in the order they are reported.
+fn optimiser_checks(config: &TrackerConfig) -> [Check; 6] {
+    [
+        Check::new(
+            "iterations",
+            f64::from(config.iterations),
+            Rule::AtMost(100.0, "must be at most 100"),
+        ),
+        Check::new("damping", config.damping, Rule::NonNegative),
+        Check::new(
+            "max_step_rotation_deg",
+            config.max_step_rotation_deg,
+            Rule::Positive(POSITIVE),
+        ),
+        Check::new(
+            "max_step_translation_diameters",
+            config.max_step_translation_diameters,
+            Rule::Positive(POSITIVE),
+        ),
+        Check::new(
+            "prior_translation_m",
+            config.prior_translation_m,
+            Rule::Positive(POSITIVE),
+        ),
+        Check::new(
+            "prior_rotation_deg",
+            config.prior_rotation_deg,
+            Rule::Positive(POSITIVE),
+        ),
+    ]
+}
 
-    /// The checks of the motion model, in the order they are reported.
-    fn motion_checks(&self) -> [Check; 5] {
-        [
-            Check::new(
-                "prediction_gain",
-                self.prediction_gain,
-                Rule::Within(0.0, 2.0, "must be 0 to 2"),
-            ),
-            Check::new("velocity_smoothing", self.velocity_smoothing, Rule::Unit),
-            Check::new(
-                "velocity_smoothing_depth",
-                self.velocity_smoothing_depth,
-                Rule::Unit,
-            ),
-            Check::new("max_speed", self.max_speed, Rule::Positive(POSITIVE)),
-            Check::new(
-                "max_angular_speed",
-                self.max_angular_speed,
-                Rule::Positive(POSITIVE),
-            ),
-        ]
-    }
+/// The checks of the motion model, in the order they are reported.
+fn motion_checks(config: &TrackerConfig) -> [Check; 5] {
+    [
+        Check::new(
+            "prediction_gain",
+            config.prediction_gain,
+            Rule::Within(0.0, 2.0, "must be 0 to 2"),
+        ),
+        Check::new("velocity_smoothing", config.velocity_smoothing, Rule::Unit),
+        Check::new(
+            "velocity_smoothing_depth",
+            config.velocity_smoothing_depth,
+            Rule::Unit,
+        ),
+        Check::new("max_speed", config.max_speed, Rule::Positive(POSITIVE)),
+        Check::new(
+            "max_angular_speed",
+            config.max_angular_speed,
+            Rule::Positive(POSITIVE),
+        ),
+    ]
+}
 
-    /// The checks of the use of depth: carried, late, the safety net, in the order they are reported.
-    fn depth_use_checks(&self) -> [Check; 8] {
-        [
-            Check::new(
-                "carried_depth_weight",
-                self.carried_depth_weight,
-                Rule::NonNegative,
-            ),
-            Check::new(
-                "hide_occluded_max_share",
-                self.hide_occluded_max_share,
-                Rule::Within(0.0, 1.0, "must be 0 to 1"),
-            ),
-            Check::new(
-                "max_depth_age_ms",
-                self.max_depth_age_ms,
-                Rule::Within(0.0, MAX_DEPTH_AGE_LIMIT_MS, "must be 0 to 500 ms"),
-            ),
-            Check::new(
-                "retrack_max_events",
-                self.retrack_max_events as f64,
-                Rule::AtMost(100_000_000.0, "must be at most 100000000 (2.4 GB)"),
-            ),
-            Check::new(
-                "depth_fallback_margin",
-                self.depth_fallback_margin,
-                Rule::Finite,
-            ),
-            Check::new(
-                "depth_fallback_motion_margin",
-                self.depth_fallback_motion_margin,
-                Rule::Finite,
-            ),
-            Check::new(
-                "depth_fallback_estimate_motion_margin",
-                self.depth_fallback_estimate_motion_margin,
-                Rule::Finite,
-            ),
-            Check::new(
-                "depth_fallback_event_weight",
-                self.depth_fallback_event_weight,
-                Rule::AtLeast(0.0, "must be 0 or more"),
-            ),
-        ]
-    }
+/// The checks of the use of depth: carried, late, the safety net, in the order they are reported.
+fn depth_use_checks(config: &TrackerConfig) -> [Check; 8] {
+    [
+        Check::new(
+            "carried_depth_weight",
+            config.carried_depth_weight,
+            Rule::NonNegative,
+        ),
+        Check::new(
+            "hide_occluded_max_share",
+            config.hide_occluded_max_share,
+            Rule::Within(0.0, 1.0, "must be 0 to 1"),
+        ),
+        Check::new(
+            "max_depth_age_ms",
+            config.max_depth_age_ms,
+            Rule::Within(0.0, MAX_DEPTH_AGE_LIMIT_MS, "must be 0 to 500 ms"),
+        ),
+        Check::new(
+            "retrack_max_events",
+            config.retrack_max_events as f64,
+            Rule::AtMost(100_000_000.0, "must be at most 100000000 (2.4 GB)"),
+        ),
+        Check::new(
+            "depth_fallback_margin",
+            config.depth_fallback_margin,
+            Rule::Finite,
+        ),
+        Check::new(
+            "depth_fallback_motion_margin",
+            config.depth_fallback_motion_margin,
+            Rule::Finite,
+        ),
+        Check::new(
+            "depth_fallback_estimate_motion_margin",
+            config.depth_fallback_estimate_motion_margin,
+            Rule::Finite,
+        ),
+        Check::new(
+            "depth_fallback_event_weight",
+            config.depth_fallback_event_weight,
+            Rule::AtLeast(0.0, "must be 0 or more"),
+        ),
+    ]
+}
 
-    /// The checks of the use of events and intensity, in the order they are reported.
-    fn event_use_checks(&self) -> [Check; 6] {
-        [
-            Check::new("event_weight", self.event_weight, Rule::NonNegative),
-            Check::new(
-                "event_window_px",
-                self.event_window_px,
-                Rule::Positive(POSITIVE),
+/// The checks of the use of events and intensity, in the order they are reported.
+fn event_use_checks(config: &TrackerConfig) -> [Check; 6] {
+    [
+        Check::new("event_weight", config.event_weight, Rule::NonNegative),
+        Check::new(
+            "event_window_px",
+            config.event_window_px,
+            Rule::Positive(POSITIVE),
+        ),
+        Check::new(
+            "min_event_window_us",
+            config.min_event_window_us as f64,
+            Rule::NonNegative,
+        ),
+        Check::new(
+            "max_event_window_us",
+            config.max_event_window_us as f64,
+            Rule::AtLeast(
+                config.min_event_window_us as f64,
+                "must be >= min_event_window_us",
             ),
-            Check::new(
-                "min_event_window_us",
-                self.min_event_window_us as f64,
-                Rule::NonNegative,
-            ),
-            Check::new(
-                "max_event_window_us",
-                self.max_event_window_us as f64,
-                Rule::AtLeast(
-                    self.min_event_window_us as f64,
-                    "must be >= min_event_window_us",
-                ),
-            ),
-            Check::new(
-                "intensity.contrast",
-                f64::from(self.intensity.contrast),
-                Rule::Positive(POSITIVE),
-            ),
-            Check::new(
-                "intensity.cutoff_hz",
-                f64::from(self.intensity.cutoff_hz),
-                Rule::NonNegative,
-            ),
-        ]
-    }
+        ),
+        Check::new(
+            "intensity.contrast",
+            f64::from(config.intensity.contrast),
+            Rule::Positive(POSITIVE),
+        ),
+        Check::new(
+            "intensity.cutoff_hz",
+            f64::from(config.intensity.cutoff_hz),
+            Rule::NonNegative,
+        ),
+    ]
+}
 
-    /// The checks of the depth term, in the order they are reported.
-    fn depth_term_checks(&self) -> [Check; 7] {
-        let d = &self.depth_term;
-        [
-            Check::new("depth_term.sigma_0", d.sigma_0, Rule::Positive(POSITIVE)),
-            Check::new("depth_term.sigma_z2", d.sigma_z2, Rule::NonNegative),
-            Check::new(
-                "depth_term.occlusion_gap",
-                d.occlusion_gap,
-                Rule::Positive(POSITIVE),
-            ),
-            Check::new(
-                "depth_term.max_residual",
-                d.max_residual,
-                Rule::Positive(POSITIVE),
-            ),
-            Check::new(
-                "event_term.contrast_step_translation",
-                self.event_term.contrast_step_translation,
-                Rule::NonNegative,
-            ),
-            Check::new(
-                "event_term.contrast_step_rotation",
-                self.event_term.contrast_step_rotation,
-                Rule::NonNegative,
-            ),
-            Check::new(
-                "event_term.contrast_rounds",
-                f64::from(self.event_term.contrast_rounds),
-                Rule::AtMost(16.0, "must be at most 16"),
-            ),
-        ]
-    }
+/// The checks of the depth term, in the order they are reported.
+fn depth_term_checks(config: &TrackerConfig) -> [Check; 7] {
+    let d = &config.depth_term;
+    [
+        Check::new("depth_term.sigma_0", d.sigma_0, Rule::Positive(POSITIVE)),
+        Check::new("depth_term.sigma_z2", d.sigma_z2, Rule::NonNegative),
+        Check::new(
+            "depth_term.occlusion_gap",
+            d.occlusion_gap,
+            Rule::Positive(POSITIVE),
+        ),
+        Check::new(
+            "depth_term.max_residual",
+            d.max_residual,
+            Rule::Positive(POSITIVE),
+        ),
+        Check::new(
+            "event_term.contrast_step_translation",
+            config.event_term.contrast_step_translation,
+            Rule::NonNegative,
+        ),
+        Check::new(
+            "event_term.contrast_step_rotation",
+            config.event_term.contrast_step_rotation,
+            Rule::NonNegative,
+        ),
+        Check::new(
+            "event_term.contrast_rounds",
+            f64::from(config.event_term.contrast_rounds),
+            Rule::AtMost(16.0, "must be at most 16"),
+        ),
+    ]
+}
 
-    /// The checks of the intensity term, in the order they are reported.
-    fn intensity_term_checks(&self) -> [Check; 6] {
-        let it = &self.intensity_term;
-        [
-            Check::new("intensity_term.weight", it.weight, Rule::NonNegative),
-            Check::new(
-                "intensity_term.box_px",
-                f64::from(it.box_px),
-                Rule::Within(1.0, 16.0, "must be 1 to 16"),
-            ),
-            Check::new("intensity_term.min_step", it.min_step, Rule::NonNegative),
-            Check::new(
-                "intensity_term.full_step",
-                it.full_step,
-                Rule::Positive(POSITIVE),
-            ),
-            Check::new(
-                "intensity_term.max_distance_px",
-                it.max_distance_px,
-                Rule::Within(0.0, 100.0, "must be 0 to 100"),
-            ),
-            Check::new(
-                "intensity_term.sigma_px",
-                it.sigma_px,
-                Rule::Positive(POSITIVE),
-            ),
-        ]
-    }
+/// The checks of the intensity term, in the order they are reported.
+fn intensity_term_checks(config: &TrackerConfig) -> [Check; 6] {
+    let it = &config.intensity_term;
+    [
+        Check::new("intensity_term.weight", it.weight, Rule::NonNegative),
+        Check::new(
+            "intensity_term.box_px",
+            f64::from(it.box_px),
+            Rule::Within(1.0, 16.0, "must be 1 to 16"),
+        ),
+        Check::new("intensity_term.min_step", it.min_step, Rule::NonNegative),
+        Check::new(
+            "intensity_term.full_step",
+            it.full_step,
+            Rule::Positive(POSITIVE),
+        ),
+        Check::new(
+            "intensity_term.max_distance_px",
+            it.max_distance_px,
+            Rule::Within(0.0, 100.0, "must be 0 to 100"),
+        ),
+        Check::new(
+            "intensity_term.sigma_px",
+            it.sigma_px,
+            Rule::Positive(POSITIVE),
+        ),
+    ]
+}
 
-    /// The checks of the event term, in the order they are reported.
-    fn event_term_checks(&self) -> [Check; 14] {
-        let e = &self.event_term;
-        [
-            Check::new(
-                "event_term.line_box_bins",
-                f64::from(e.line_box_bins),
-                Rule::Within(1.0, 32.0, "must be 1 to 32"),
-            ),
-            Check::new(
-                "event_term.line_min_contrast",
-                e.line_min_contrast,
-                Rule::PositiveUnit("must be in (0, 1]"),
-            ),
-            Check::new("event_term.sigma_px", e.sigma_px, Rule::Positive(POSITIVE)),
-            Check::new(
-                "event_term.max_distance_px",
-                e.max_distance_px,
-                Rule::Positive(POSITIVE),
-            ),
-            Check::new(
-                "event_term.match_distance_px",
-                e.match_distance_px,
-                Rule::NonNegative,
-            ),
-            Check::new("event_term.match_weight", e.match_weight, Rule::NonNegative),
-            Check::new("event_term.min_sweep_px", e.min_sweep_px, Rule::NonNegative),
-            Check::new(
-                "event_term.edge_tolerance_px",
-                e.edge_tolerance_px,
-                Rule::NonNegative,
-            ),
-            Check::new("event_term.hinge_weight", e.hinge_weight, Rule::NonNegative),
-            Check::new(
-                "event_term.search_px",
-                e.search_px,
-                Rule::Within(0.0, 200.0, "must be 0 to 200 pixels"),
-            ),
-            Check::new(
-                "event_term.search_min_px",
-                e.search_min_px,
-                Rule::NonNegative,
-            ),
-            Check::new(
-                "event_term.search_speed_factor",
-                e.search_speed_factor,
-                Rule::NonNegative,
-            ),
-            Check::new(
-                "event_term.search_min_gain",
-                e.search_min_gain,
-                Rule::NonNegative,
-            ),
-            Check::new(
-                "event_term.search_aperture_tolerance",
-                e.search_aperture_tolerance,
-                Rule::Unit,
-            ),
-        ]
-    }
+/// The checks of the event term, in the order they are reported.
+fn event_term_checks(config: &TrackerConfig) -> [Check; 14] {
+    let e = &config.event_term;
+    [
+        Check::new(
+            "event_term.line_box_bins",
+            f64::from(e.line_box_bins),
+            Rule::Within(1.0, 32.0, "must be 1 to 32"),
+        ),
+        Check::new(
+            "event_term.line_min_contrast",
+            e.line_min_contrast,
+            Rule::PositiveUnit("must be in (0, 1]"),
+        ),
+        Check::new("event_term.sigma_px", e.sigma_px, Rule::Positive(POSITIVE)),
+        Check::new(
+            "event_term.max_distance_px",
+            e.max_distance_px,
+            Rule::Positive(POSITIVE),
+        ),
+        Check::new(
+            "event_term.match_distance_px",
+            e.match_distance_px,
+            Rule::NonNegative,
+        ),
+        Check::new("event_term.match_weight", e.match_weight, Rule::NonNegative),
+        Check::new("event_term.min_sweep_px", e.min_sweep_px, Rule::NonNegative),
+        Check::new(
+            "event_term.edge_tolerance_px",
+            e.edge_tolerance_px,
+            Rule::NonNegative,
+        ),
+        Check::new("event_term.hinge_weight", e.hinge_weight, Rule::NonNegative),
+        Check::new(
+            "event_term.search_px",
+            e.search_px,
+            Rule::Within(0.0, 200.0, "must be 0 to 200 pixels"),
+        ),
+        Check::new(
+            "event_term.search_min_px",
+            e.search_min_px,
+            Rule::NonNegative,
+        ),
+        Check::new(
+            "event_term.search_speed_factor",
+            e.search_speed_factor,
+            Rule::NonNegative,
+        ),
+        Check::new(
+            "event_term.search_min_gain",
+            e.search_min_gain,
+            Rule::NonNegative,
+        ),
+        Check::new(
+            "event_term.search_aperture_tolerance",
+            e.search_aperture_tolerance,
+            Rule::Unit,
+        ),
+    ]
+}
 
-    /// The checks of quality and state, in the order they are reported.
-    fn quality_checks(&self) -> [Check; 5] {
-        let q = &self.quality;
-        [
-            Check::new(
-                "quality.degraded_below",
-                f64::from(q.degraded_below),
-                Rule::Unit,
-            ),
-            Check::new("quality.lost_below", f64::from(q.lost_below), Rule::Unit),
-            Check::new(
-                "quality.lost_mean_below",
-                f64::from(q.lost_mean_below),
-                Rule::Unit,
-            ),
-            Check::new(
-                "quality.lost_mean_ticks",
-                f64::from(q.lost_mean_ticks),
-                Rule::AtMost(12_000.0, "must be at most 12000 ticks (100 s at 120 Hz)"),
-            ),
-            Check::new(
-                "quality.recover_ticks",
-                f64::from(q.recover_ticks),
-                Rule::AtMost(12_000.0, "must be at most 12000 ticks (100 s at 120 Hz)"),
-            ),
-        ]
-    }
+/// The checks of quality and state, in the order they are reported.
+fn quality_checks(config: &TrackerConfig) -> [Check; 5] {
+    let q = &config.quality;
+    [
+        Check::new(
+            "quality.degraded_below",
+            f64::from(q.degraded_below),
+            Rule::Unit,
+        ),
+        Check::new("quality.lost_below", f64::from(q.lost_below), Rule::Unit),
+        Check::new(
+            "quality.lost_mean_below",
+            f64::from(q.lost_mean_below),
+            Rule::Unit,
+        ),
+        Check::new(
+            "quality.lost_mean_ticks",
+            f64::from(q.lost_mean_ticks),
+            Rule::AtMost(12_000.0, "must be at most 12000 ticks (100 s at 120 Hz)"),
+        ),
+        Check::new(
+            "quality.recover_ticks",
+            f64::from(q.recover_ticks),
+            Rule::AtMost(12_000.0, "must be at most 12000 ticks (100 s at 120 Hz)"),
+        ),
+    ]
+}
 
-    /// The checks of re-detection, in the order they are reported.
-    fn redetect_checks(&self) -> [Check; 7] {
-        let r = &self.redetect;
-        [
-            Check::new(
-                "redetect.cell_px",
-                f64::from(r.cell_px),
-                Rule::Within(1.0, 64.0, "must be 1 to 64 depth pixels"),
-            ),
-            Check::new(
-                "redetect.foreground_margin_m",
-                r.foreground_margin_m,
-                Rule::NonNegative,
-            ),
-            Check::new(
-                "redetect.candidates",
-                r.candidates as f64,
-                Rule::AtMost(16.0, "must be at most 16"),
-            ),
-            Check::new(
-                "redetect.foreground_sigmas",
-                r.foreground_sigmas,
-                Rule::NonNegative,
-            ),
-            Check::new("redetect.min_support", r.min_support, Rule::NonNegative),
-            Check::new("redetect.margin", r.margin, Rule::NonNegative),
-            Check::new("redetect.min_score", r.min_score, Rule::Unit),
-        ]
-    }
+/// The checks of re-detection, in the order they are reported.
+fn redetect_checks(config: &TrackerConfig) -> [Check; 7] {
+    let r = &config.redetect;
+    [
+        Check::new(
+            "redetect.cell_px",
+            f64::from(r.cell_px),
+            Rule::Within(1.0, 64.0, "must be 1 to 64 depth pixels"),
+        ),
+        Check::new(
+            "redetect.foreground_margin_m",
+            r.foreground_margin_m,
+            Rule::NonNegative,
+        ),
+        Check::new(
+            "redetect.candidates",
+            r.candidates as f64,
+            Rule::AtMost(16.0, "must be at most 16"),
+        ),
+        Check::new(
+            "redetect.foreground_sigmas",
+            r.foreground_sigmas,
+            Rule::NonNegative,
+        ),
+        Check::new("redetect.min_support", r.min_support, Rule::NonNegative),
+        Check::new("redetect.margin", r.margin, Rule::NonNegative),
+        Check::new("redetect.min_score", r.min_score, Rule::Unit),
+    ]
 }
 
 #[cfg(test)]
@@ -473,12 +471,12 @@ mod tests {
 
     #[test]
     fn defaults_are_valid() {
-        assert_eq!(TrackerConfig::default().validate(), Ok(()));
+        assert_eq!(validate(&TrackerConfig::default()), Ok(()));
     }
 
     #[test]
     fn errors_name_the_key() {
-        let parse = |text: &str| toml::from_str::<TrackerConfig>(text).unwrap().validate();
+        let parse = |text: &str| validate(&toml::from_str::<TrackerConfig>(text).unwrap());
         let e = parse("prior_translation_m = 0.0").unwrap_err();
         assert_eq!(e.key, "prior_translation_m");
         let e = parse("hide_occluded_max_share = 1.5").unwrap_err();

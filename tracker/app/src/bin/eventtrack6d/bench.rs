@@ -58,22 +58,13 @@ pub struct BenchArgs {
     /// Hand each depth frame to the tracker methods this long after its exposure, 0 to 1000 ms, at the first tick
     /// that late, as a live depth camera's transport delivers it (0 = with its own tick; the harness methods ignore
     /// it). The tracker uses a frame up to its `max_depth_age_ms` old. results.md says so below the tables.
-    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = parse_latency_ms)]
+    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = crate::args::parse_latency_ms)]
     pub depth_latency_ms: f64,
     /// Add up to this much to each frame's latency, 0 to 1000 ms, drawn per frame from its exposure time (the same
     /// in every run, and the same draw as a replay's `[source] depth_latency_jitter_ms`), frames kept in order: a
     /// live camera's latency varies from frame to frame.
-    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = parse_latency_ms)]
+    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = crate::args::parse_latency_ms)]
     pub depth_latency_jitter_ms: f64,
-}
-
-/// A depth latency in milliseconds: a finite number from 0 to 1000.
-pub fn parse_latency_ms(text: &str) -> Result<f64, String> {
-    text.trim()
-        .parse::<f64>()
-        .ok()
-        .filter(|v| v.is_finite() && (0.0..=1000.0).contains(v))
-        .ok_or_else(|| format!("`{text}` is not a latency from 0 to 1000 ms"))
 }
 
 /// Generates (or lets hil-sim reuse) the named suite and returns its directory.
@@ -170,7 +161,7 @@ fn load_suite(dir: &Path) -> Result<Vec<SuiteSequence>> {
 
 /// Runs the command.
 pub fn run(args: &BenchArgs) -> Result<()> {
-    let base = crate::track::tracker_params(args.params.as_deref())?;
+    let base = crate::args::tracker_params(args.params.as_deref())?;
     let mut methods = Vec::new();
     let specs = expand_seeds(&args.methods, args.seeds);
     if args.seeds > 1 && specs.len() == args.methods.len() {
@@ -328,22 +319,4 @@ fn plot_sequence(out: &Path, seq: &SuiteSequence, results: &[MethodResults]) -> 
     img.save(&path)
         .with_context(|| format!("cannot write {}", path.display()))?;
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use proptest::prelude::*;
-
-    proptest! {
-        /// Any `--depth-latency-ms` text gives a latency of 0..=1000 ms or an error quoting it; written ones read back.
-        #[test]
-        fn any_latency_text_parses_or_quotes_it(text in "[0-9.eE+ -]{0,10}", ms in 0.0f64..=1000.0) {
-            match parse_latency_ms(&text) {
-                Ok(v) => prop_assert!((0.0..=1000.0).contains(&v)),
-                Err(e) => prop_assert!(e.contains(&format!("`{text}`")), "{}", e),
-            }
-            prop_assert_eq!(parse_latency_ms(&ms.to_string()), Ok(ms));
-        }
-    }
 }

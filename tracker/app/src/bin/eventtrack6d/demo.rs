@@ -6,7 +6,7 @@ use crate::{demo_sequence, session};
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use drivers::recording::Recording;
-use eventtrack6d::runtime::config::{Config, Pace};
+use eventtrack6d::runtime::config::{self, Pace};
 use std::path::{Path, PathBuf};
 
 /// Run the built-in demo: no arguments, no hardware, no downloads.
@@ -63,11 +63,11 @@ pub struct DemoArgs {
     /// Deliver each depth frame this long after its exposure, 0 to 1000 ms, as a live depth camera's transport does
     /// (`[source] depth_latency_ms`; default 0: with its own tick). How the tracker uses late frames:
     /// docs/tracker.md.
-    #[arg(long, value_name = "MS", value_parser = crate::bench::parse_latency_ms)]
+    #[arg(long, value_name = "MS", value_parser = crate::args::parse_latency_ms)]
     pub depth_latency_ms: Option<f64>,
     /// Add up to this much to each depth frame's latency, 0 to 1000 ms, drawn per frame
     /// (`[source] depth_latency_jitter_ms`; default 0).
-    #[arg(long, value_name = "MS", value_parser = crate::bench::parse_latency_ms)]
+    #[arg(long, value_name = "MS", value_parser = crate::args::parse_latency_ms)]
     pub depth_latency_jitter_ms: Option<f64>,
 }
 
@@ -92,7 +92,7 @@ fn write_overlay_strip(recording: &Path, poses_csv: &Path, out: &Path) -> Result
 
 /// Runs the command.
 pub fn run(args: &DemoArgs) -> Result<()> {
-    let mut config = Config::builtin_default()?;
+    let mut config = config::builtin_default()?;
     let d = &mut config.demo;
     if let Some(o) = &args.object {
         d.object = o.clone();
@@ -124,7 +124,7 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     if let Some(p) = &args.latency_log {
         config.output.latency_log = Some(session::from_working_dir(p)?);
     }
-    config.validate("eventtrack6d demo")?;
+    config::validate(&config, "eventtrack6d demo")?;
     let cache = args
         .cache_dir
         .clone()

@@ -1,5 +1,6 @@
 //! `eventtrack6d`: the EventTrack6D command-line tool.
 
+mod args;
 mod bench;
 mod convert;
 mod demo;

@@ -6,7 +6,7 @@ use crate::{demo_sequence, session};
 use anyhow::Result;
 use clap::Args;
 use drivers::recording::Recording;
-use eventtrack6d::runtime::{Config, SourceKind};
+use eventtrack6d::runtime::config::{self, SourceKind};
 use std::path::PathBuf;
 
 /// Run the real-time pipeline of a configuration file: source -> trigger timeline -> tracker thread -> sinks.
@@ -38,9 +38,9 @@ pub struct RunArgs {
 
 /// Runs the command.
 pub fn run(args: &RunArgs) -> Result<()> {
-    let mut config = Config::load(&args.config)?;
+    let mut config = config::load(&args.config)?;
     if let Ok(text) = std::fs::read_to_string(&args.config) {
-        for note in config.unused_tables(&text) {
+        for note in config::unused_tables(&config, &text) {
             eprintln!("warning: {}: {note}", args.config.display());
         }
     }

@@ -6,15 +6,15 @@ use clap::Args;
 use drivers::recording::Recording;
 use eval::{InitNoise, OverlayRenderer, OverlayWriter};
 use scene::render::{Renderer, RendererKind, create_renderer};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 use tracker::recording::{
     PoseRecord, PoseTrack, format_pose_csv, ground_truth_objects, parse_pose_csv, recording_object,
     recording_rig, recording_ticks,
 };
 use tracker::track::{
-    DepthFallbackCheck, EventTrack6d, FALLBACK_TRACE_HEADER, OfflineTiming, TrackerConfig,
-    TrackingMethod, track_recording_timed,
+    DepthFallbackCheck, EventTrack6d, FALLBACK_TRACE_HEADER, OfflineTiming, TrackingMethod,
+    track_recording_timed,
 };
 
 /// Track the objects of a recording offline and write their poses as a CSV.
@@ -78,29 +78,13 @@ pub struct TrackArgs {
     /// late, as a live depth camera's transport delivers it (0 = with its own tick). The tracker uses a frame up to
     /// its `max_depth_age_ms` old. The closing lines count the frames used late and those still in transit at the
     /// end.
-    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = crate::bench::parse_latency_ms)]
+    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = crate::args::parse_latency_ms)]
     pub depth_latency_ms: f64,
     /// Add up to this much to each frame's latency, 0 to 1000 ms, drawn per frame from its exposure time (the same
     /// in every run, and the same draw as a replay's `[source] depth_latency_jitter_ms`), frames kept in order: a
     /// live camera's latency varies from frame to frame.
-    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = crate::bench::parse_latency_ms)]
+    #[arg(long, value_name = "MS", default_value_t = 0.0, value_parser = crate::args::parse_latency_ms)]
     pub depth_latency_jitter_ms: f64,
-}
-
-/// Tracker parameters from a `--params` TOML file (the `[tracker]` table's keys at top level), validated; the
-/// defaults without one.
-pub fn tracker_params(path: Option<&Path>) -> Result<TrackerConfig> {
-    let Some(path) = path else {
-        return Ok(TrackerConfig::default());
-    };
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let config = toml::from_str::<TrackerConfig>(&text)
-        .with_context(|| format!("{}: invalid tracker parameters", path.display()))?;
-    config
-        .validate()
-        .with_context(|| format!("{}: invalid tracker parameters", path.display()))?;
-    Ok(config)
 }
 
 /// Runs the command.
@@ -111,7 +95,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             args.method
         )
     })?;
-    let mut base = tracker_params(args.params.as_deref())?;
+    let mut base = crate::args::tracker_params(args.params.as_deref())?;
     // The overlays draw the tracker's own `I_t`.
     base.intensity.always |= args.overlay.is_some();
     let config = method.configure(&base);

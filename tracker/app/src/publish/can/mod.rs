@@ -88,7 +88,9 @@ pub enum CanError {
 /// candump_log = "out/can.log"  # also write frames to a candump log file; default: none
 /// queue_len = 64            # SocketCAN queue, in poses (drop-oldest when full); default 64
 /// ```
-#[derive(Debug, Clone, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[derive(
+    Debug, Clone, PartialEq, Eq, serde::Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(deny_unknown_fields, default)]
 pub struct CanConfig {
     /// Publish on CAN at all (default `true`; nothing is created unless `interface` or `candump_log` is set).

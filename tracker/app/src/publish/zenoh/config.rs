@@ -4,7 +4,17 @@
 use crate::publish::ros2;
 
 /// zenoh session mode.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Deserialize,
+    serde::Serialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum SessionMode {
     /// Peer (the default, as ROS 2 nodes under rmw_zenoh): talks to peers and routers it connects to.
@@ -15,7 +25,17 @@ pub enum SessionMode {
 }
 
 /// What a publisher does when the transport's queue is full.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Default,
+    serde::Deserialize,
+    serde::Serialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum CongestionPolicy {
     /// Drop the sample (the default: never stall the tracker; what rmw_zenoh does for keep-last publishers).
@@ -27,7 +47,9 @@ pub enum CongestionPolicy {
 
 /// zenoh / ROS 2 publishing settings; the runtime's TOML configuration embeds this table (e.g. `[zenoh]`).
 /// Every field has a default, unknown keys are rejected.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[derive(
+    Debug, Clone, PartialEq, Eq, serde::Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(deny_unknown_fields, default)]
 pub struct ZenohConfig {
     /// Session mode, `peer` (default) or `client`.

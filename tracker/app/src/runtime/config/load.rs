@@ -1,87 +1,85 @@
 //! Reading a configuration: TOML text or file to [`Config`], path resolution, and parse errors that name the
 //! line and the key.
 
+use super::validate::{check_files, validate};
 use super::*;
 use std::path::Path;
 
-impl Config {
-    /// Parses and validates TOML text; `origin` names it in errors. Relative paths stay relative.
-    pub fn from_toml(text: &str, origin: &str) -> Result<Self, ConfigError> {
-        let config: Config = toml::from_str(text).map_err(|e| parse_error(text, origin, &e))?;
-        config.validate(origin)?;
-        Ok(config)
-    }
+/// Parses and validates TOML text; `origin` names it in errors. Relative paths stay relative.
+pub fn from_toml(text: &str, origin: &str) -> Result<Config, ConfigError> {
+    let config: Config = toml::from_str(text).map_err(|e| parse_error(text, origin, &e))?;
+    validate(&config, origin)?;
+    Ok(config)
+}
 
-    /// The built-in demo configuration.
-    pub fn builtin_default() -> Result<Self, ConfigError> {
-        Self::from_toml(DEFAULT_CONFIG_TOML, "<built-in config/default.toml>")
-    }
+/// The built-in demo configuration.
+pub fn builtin_default() -> Result<Config, ConfigError> {
+    from_toml(DEFAULT_CONFIG_TOML, "<built-in config/default.toml>")
+}
 
-    /// Reads, parses, resolves paths against the file's directory, and validates (files included).
-    pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|error| ConfigError::Read {
-            path: path.to_path_buf(),
-            error,
-        })?;
-        let origin = path.display().to_string();
-        let mut config: Config =
-            toml::from_str(&text).map_err(|e| parse_error(&text, &origin, &e))?;
-        let base = path.parent().unwrap_or_else(|| Path::new("."));
-        config.resolve_paths(base);
-        config.validate(&origin)?;
-        config.check_files(&origin)?;
-        Ok(config)
-    }
+/// Reads, parses, resolves paths against the file's directory, and validates (files included).
+pub fn load(path: &Path) -> Result<Config, ConfigError> {
+    let text = std::fs::read_to_string(path).map_err(|error| ConfigError::Read {
+        path: path.to_path_buf(),
+        error,
+    })?;
+    let origin = path.display().to_string();
+    let mut config: Config = toml::from_str(&text).map_err(|e| parse_error(&text, &origin, &e))?;
+    let base = path.parent().unwrap_or_else(|| Path::new("."));
+    resolve_paths(&mut config, base);
+    validate(&config, &origin)?;
+    check_files(&config, &origin)?;
+    Ok(config)
+}
 
-    /// The tables of the TOML `text` this configuration was read from that it does not use, each with why: a
-    /// source table other than the chosen source's, `[zenoh]` with the zenoh sink off, `[can]` keys other than
-    /// `enabled` with CAN off. A user who edited one of them expects it to matter, so `run` warns about each.
-    pub fn unused_tables(&self, text: &str) -> Vec<String> {
-        let Ok(doc) = toml::from_str::<toml::Table>(text) else {
-            return Vec::new();
-        };
-        let kind = self.source.kind.as_str();
-        let mut unused = Vec::new();
-        for (table, used) in [
-            ("demo", self.source.kind == SourceKind::Demo),
-            ("replay", self.source.kind == SourceKind::Replay),
-            ("live", self.source.kind == SourceKind::Live),
-        ] {
-            if !used && doc.contains_key(table) {
-                unused.push(format!("[{table}] is not used: [source] kind is `{kind}`"));
-            }
+/// The tables of the TOML `text` this configuration was read from that it does not use, each with why: a
+/// source table other than the chosen source's, `[zenoh]` with the zenoh sink off, `[can]` keys other than
+/// `enabled` with CAN off. A user who edited one of them expects it to matter, so `run` warns about each.
+pub fn unused_tables(config: &Config, text: &str) -> Vec<String> {
+    let Ok(doc) = toml::from_str::<toml::Table>(text) else {
+        return Vec::new();
+    };
+    let kind = config.source.kind.as_str();
+    let mut unused = Vec::new();
+    for (table, used) in [
+        ("demo", config.source.kind == SourceKind::Demo),
+        ("replay", config.source.kind == SourceKind::Replay),
+        ("live", config.source.kind == SourceKind::Live),
+    ] {
+        if !used && doc.contains_key(table) {
+            unused.push(format!("[{table}] is not used: [source] kind is `{kind}`"));
         }
-        if !self.sinks.zenoh && doc.contains_key("zenoh") {
-            unused.push("[zenoh] is not used: [sinks] zenoh is false".into());
-        }
-        let can_keys = doc
-            .get("can")
-            .and_then(toml::Value::as_table)
-            .is_some_and(|t| t.keys().any(|k| k != "enabled"));
-        if !self.can.enabled && can_keys {
-            unused.push("[can] is not used: [can] enabled is false".into());
-        }
-        unused
     }
+    if !config.sinks.zenoh && doc.contains_key("zenoh") {
+        unused.push("[zenoh] is not used: [sinks] zenoh is false".into());
+    }
+    let can_keys = doc
+        .get("can")
+        .and_then(toml::Value::as_table)
+        .is_some_and(|t| t.keys().any(|k| k != "enabled"));
+    if !config.can.enabled && can_keys {
+        unused.push("[can] is not used: [can] enabled is false".into());
+    }
+    unused
+}
 
-    /// Makes every relative path absolute-or-relative to `base` (the configuration file's directory).
-    pub fn resolve_paths(&mut self, base: &Path) {
-        let join = |p: &mut PathBuf| {
-            if p.is_relative() {
-                *p = base.join(&*p);
-            }
-        };
-        if let Some(r) = &mut self.replay {
-            join(&mut r.recording);
+/// Makes every relative path absolute-or-relative to `base` (the configuration file's directory).
+pub fn resolve_paths(config: &mut Config, base: &Path) {
+    let join = |p: &mut PathBuf| {
+        if p.is_relative() {
+            *p = base.join(&*p);
         }
-        if let Some(l) = &mut self.live {
-            join(&mut l.calibration);
-        }
-        for o in &mut self.objects {
-            join(&mut o.mesh);
-        }
-        join(&mut self.output.dir);
+    };
+    if let Some(r) = &mut config.replay {
+        join(&mut r.recording);
     }
+    if let Some(l) = &mut config.live {
+        join(&mut l.calibration);
+    }
+    for o in &mut config.objects {
+        join(&mut o.mesh);
+    }
+    join(&mut config.output.dir);
 }
 
 /// Turns a TOML/serde error into a [`ConfigError::Parse`] with the line and the dotted key at the error.

@@ -3,12 +3,12 @@ use super::*;
 use std::path::Path;
 
 fn parse(text: &str) -> Result<Config, ConfigError> {
-    Config::from_toml(text, "test.toml")
+    from_toml(text, "test.toml")
 }
 
 #[test]
 fn builtin_default_is_the_demo() {
-    let c = Config::builtin_default().unwrap();
+    let c = builtin_default().unwrap();
     assert_eq!(c.source.kind, SourceKind::Demo);
     assert_eq!(c.source.pace, Pace::Realtime);
     assert!(c.sinks.zenoh && c.sinks.csv && c.can.enabled);
@@ -156,7 +156,7 @@ fn missing_mesh_file_is_named() {
          orientation = [0.0, 0.0, 0.0, 1.0]\n",
     )
     .unwrap();
-    let e = Config::load(&cfg).unwrap_err().to_string();
+    let e = load(&cfg).unwrap_err().to_string();
     assert!(e.contains("`objects[0].mesh`"), "{e}");
     assert!(
         e.contains("objects/mug.obj") && e.contains("does not exist"),
@@ -165,7 +165,7 @@ fn missing_mesh_file_is_named() {
     // With the mesh there the configuration is accepted, paths resolved against its directory.
     std::fs::create_dir(dir.path().join("objects")).unwrap();
     std::fs::write(dir.path().join("objects/mug.obj"), "v 0 0 0\n").unwrap();
-    let c = Config::load(&cfg).unwrap();
+    let c = load(&cfg).unwrap();
     assert_eq!(c.objects[0].mesh, dir.path().join("objects/mug.obj"));
 }
 
@@ -191,9 +191,9 @@ fn key_lookup() {
 #[test]
 fn shipped_configurations_load_and_the_rig_says_live_is_not_there_yet() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config");
-    let demo = Config::load(&root.join("default.toml")).unwrap();
+    let demo = load(&root.join("default.toml")).unwrap();
     assert_eq!(demo.source.kind, SourceKind::Demo);
-    let rig = Config::load(&root.join("rig-evk4-d435i.toml")).unwrap();
+    let rig = load(&root.join("rig-evk4-d435i.toml")).unwrap();
     assert_eq!(rig.source.kind, SourceKind::Live);
     assert_eq!(rig.can.interface.as_deref(), Some("can0"));
     assert_eq!(rig.objects[0].name, "box");
@@ -214,7 +214,7 @@ fn tables_the_configuration_does_not_use_are_named() {
     let text = "[source]\nkind = \"replay\"\n[replay]\nrecording = \"r\"\n[demo]\nseed = 3\n\
                 [sinks]\nzenoh = false\n[zenoh]\ndomain_id = 5\n[can]\nenabled = false\ninterface = \"can1\"\n";
     let c = parse(text).unwrap();
-    let unused = c.unused_tables(text);
+    let unused = unused_tables(&c, text);
     assert_eq!(
         unused,
         [
@@ -231,7 +231,7 @@ fn tables_the_configuration_does_not_use_are_named() {
         if path.extension().is_some_and(|e| e == "toml") {
             let text = std::fs::read_to_string(&path).unwrap();
             let c = parse(&text).unwrap();
-            let unused = c.unused_tables(&text);
+            let unused = unused_tables(&c, &text);
             assert!(unused.is_empty(), "{}: {unused:?}", path.display());
             checked += 1;
         }

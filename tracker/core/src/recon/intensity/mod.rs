@@ -15,7 +15,9 @@ use log::LoggedEvent;
 pub use log::SurfaceLog;
 
 /// Parameters of the log-intensity filter.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize, schemars::JsonSchema,
+)]
 #[serde(deny_unknown_fields, default)]
 pub struct IntensityFilterConfig {
     /// Log-intensity step per event (the sensor's mean contrast threshold), unitless; the simulator draws

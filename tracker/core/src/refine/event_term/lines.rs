@@ -66,69 +66,14 @@ impl LineMatches {
                     -1
                 }
             }));
-            let samples = &self.line_samples;
-            let occ = |t: i64| -> Option<u8> {
-                let s = samples[(t - first) as usize];
-                (s >= 0).then_some(s as u8)
-            };
             let expected = (-sweep).max(0.0) * sx;
-            let mut best: Option<(f64, f64)> = None;
-            // A step between samples b-1 and b: inside = [b-k, b), outside = [b, b+k).
-            let mut inside = 0i64;
-            let mut outside = 0i64;
-            let mut valid = true;
-            for t in -reach - k..-reach {
-                match occ(t) {
-                    Some(v) => inside += i64::from(v),
-                    None => valid = false,
-                }
-            }
-            for t in -reach..-reach + k {
-                match occ(t) {
-                    Some(v) => outside += i64::from(v),
-                    None => valid = false,
-                }
-            }
-            let mut invalid_until = if valid { i64::MIN } else { -reach + k };
-            for b in -reach..=reach {
-                if b > -reach {
-                    // slide: sample b-1 moves from outside to inside, b-1-k leaves inside, b+k-1 enters outside
-                    let (leave, mid, enter) = (occ(b - 1 - k), occ(b - 1), occ(b + k - 1));
-                    match (leave, mid, enter) {
-                        (Some(l), Some(m), Some(e)) => {
-                            inside += i64::from(m) - i64::from(l);
-                            outside += i64::from(e) - i64::from(m);
-                        }
-                        _ => {
-                            invalid_until = b + 2 * k;
-                            // recompute from scratch once the window is back inside the ROI
-                            inside = (b - k..b).filter_map(occ).map(i64::from).sum();
-                            outside = (b..b + k).filter_map(occ).map(i64::from).sum();
-                        }
-                    }
-                }
-                if b < invalid_until {
-                    continue;
-                }
-                let contrast = (inside - outside) as f64 / k as f64;
-                if contrast < term.line_min_contrast {
-                    continue;
-                }
-                // The step lies between samples b-1 and b; the contour point is the centre of the silhouette's
-                // last pixel, half a bin inside the outline, so the matching contour position is b - 1.
-                let at = b as f64 - 1.0;
-                let better = match best {
-                    None => true,
-                    Some((c, a)) => {
-                        contrast > c + 1e-9
-                            || ((contrast - c).abs() <= 1e-9
-                                && (at - expected).abs() < (a - expected).abs())
-                    }
-                };
-                if better {
-                    best = Some((contrast, at));
-                }
-            }
+            let best = best_step(
+                &self.line_samples,
+                reach,
+                k,
+                expected,
+                term.line_min_contrast,
+            );
             self.line_match.push(best.map(|(contrast, at)| {
                 let (i, j) = (fi + at * mx, fj + at * my);
                 (
@@ -176,4 +121,81 @@ impl LineMatches {
         }
         active
     }
+}
+
+/// The outline step on one correspondence line: `samples` holds its occupancy at offsets `-reach - k` to
+/// `reach + k - 1` (1 event, 0 none, -1 outside the ROI), `k` the length of each side of the step detector. The
+/// step is between samples `b - 1` and `b` for `b` within `reach`, with at least `min_contrast` (fraction of
+/// occupied bins inside less outside); of equal contrasts the one nearest `expected` (bins) wins. Returns its
+/// contrast and the contour position it gives (`b - 1`).
+fn best_step(
+    samples: &[i8],
+    reach: i64,
+    k: i64,
+    expected: f64,
+    min_contrast: f64,
+) -> Option<(f64, f64)> {
+    let first = -reach - k;
+    let occ = |t: i64| -> Option<u8> {
+        let s = samples[(t - first) as usize];
+        (s >= 0).then_some(s as u8)
+    };
+    let mut best: Option<(f64, f64)> = None;
+    // A step between samples b-1 and b: inside = [b-k, b), outside = [b, b+k).
+    let mut inside = 0i64;
+    let mut outside = 0i64;
+    let mut valid = true;
+    for t in -reach - k..-reach {
+        match occ(t) {
+            Some(v) => inside += i64::from(v),
+            None => valid = false,
+        }
+    }
+    for t in -reach..-reach + k {
+        match occ(t) {
+            Some(v) => outside += i64::from(v),
+            None => valid = false,
+        }
+    }
+    let mut invalid_until = if valid { i64::MIN } else { -reach + k };
+    for b in -reach..=reach {
+        if b > -reach {
+            // slide: sample b-1 moves from outside to inside, b-1-k leaves inside, b+k-1 enters outside
+            let (leave, mid, enter) = (occ(b - 1 - k), occ(b - 1), occ(b + k - 1));
+            match (leave, mid, enter) {
+                (Some(l), Some(m), Some(e)) => {
+                    inside += i64::from(m) - i64::from(l);
+                    outside += i64::from(e) - i64::from(m);
+                }
+                _ => {
+                    invalid_until = b + 2 * k;
+                    // recompute from scratch once the window is back inside the ROI
+                    inside = (b - k..b).filter_map(occ).map(i64::from).sum();
+                    outside = (b..b + k).filter_map(occ).map(i64::from).sum();
+                }
+            }
+        }
+        if b < invalid_until {
+            continue;
+        }
+        let contrast = (inside - outside) as f64 / k as f64;
+        if contrast < min_contrast {
+            continue;
+        }
+        // The step lies between samples b-1 and b; the contour point is the centre of the silhouette's
+        // last pixel, half a bin inside the outline, so the matching contour position is b - 1.
+        let at = b as f64 - 1.0;
+        let better = match best {
+            None => true,
+            Some((c, a)) => {
+                contrast > c + 1e-9
+                    || ((contrast - c).abs() <= 1e-9
+                        && (at - expected).abs() < (a - expected).abs())
+            }
+        };
+        if better {
+            best = Some((contrast, at));
+        }
+    }
+    best
 }

@@ -5,7 +5,7 @@ use super::bins::EventBins;
 use super::term::EventTerm;
 use crate::refine::ModelView;
 use nalgebra::Isometry3;
-use scene::geometry::PinholeCamera;
+use scene::geometry::{PinholeCamera, Roi};
 
 /// The shift search's buffers, reused from tick to tick.
 #[derive(Debug, Clone, Default)]
@@ -45,7 +45,43 @@ impl ShiftSearch {
         let sx = f64::from(bins.width) / roi.width;
         let sy = f64::from(bins.height) / roi.height;
         let (wi, hi) = (i64::from(bins.width), i64::from(bins.height));
-        // Contour points on the ROI grid with their inside / outside probe offsets (two bins each way).
+        self.place_probes(view, pose, camera, &roi, sx, sy);
+        if self.probes.is_empty() {
+            return None;
+        }
+        // A shift past the grid's size cannot bring an outline onto it: the bound keeps a tiny ROI (an object
+        // estimated far away, many grid bins per pixel) from asking for a search of millions of shifts.
+        let range = ((range_px * sx).round() as i64).min(wi.max(hi));
+        let wp = self.pad_grid(bins, range);
+        let base = score(&self.padded, &self.probe_index, wp, 0, 0);
+        let coarse = 3i64;
+        let slack = (term.search_aperture_tolerance * (2 * self.probes.len()) as f64) as i64;
+        let mut best = self.coarse_scan(range, coarse, wp, base, slack, motion_dir, (sx, sy));
+        let (ci, cj) = (best.1, best.2);
+        for dj in (cj - coarse + 1).max(-range)..(cj + coarse).min(range + 1) {
+            for di in (ci - coarse + 1).max(-range)..(ci + coarse).min(range + 1) {
+                let v = score(&self.padded, &self.probe_index, wp, di, dj);
+                if v > best.0 {
+                    best = (v, di, dj);
+                }
+            }
+        }
+        let gain = (best.0 - base) as f64 / (2 * self.probes.len()) as f64;
+        (gain >= term.search_min_gain && (best.1, best.2) != (0, 0))
+            .then(|| [best.1 as f64 / sx, best.2 as f64 / sy])
+    }
+
+    /// The contour points of `view` at `pose` on the ROI grid (`sx`, `sy` bins per full-image pixel), each with its
+    /// inside and outside probe bins (two each way along its normal), into `self.probes`.
+    fn place_probes(
+        &mut self,
+        view: &ModelView,
+        pose: &Isometry3<f64>,
+        camera: &PinholeCamera,
+        roi: &Roi,
+        sx: f64,
+        sy: f64,
+    ) {
         self.probes.clear();
         self.probes.reserve(view.contour.capacity());
         for cp in &view.contour {
@@ -58,15 +94,14 @@ impl ShiftSearch {
             let at = |d: f64| [(fi + d * mx).round() as i32, (fj + d * my).round() as i32];
             self.probes.push([at(-1.0), at(-2.0), at(1.0), at(2.0)]);
         }
-        if self.probes.is_empty() {
-            return None;
-        }
-        // A shift past the grid's size cannot bring an outline onto it: the bound keeps a tiny ROI (an object
-        // estimated far away, many grid bins per pixel) from asking for a search of millions of shifts.
-        let range = ((range_px * sx).round() as i64).min(wi.max(hi));
-        // Every probe reads a zero-padded copy of the grid, so no shift needs a bounds check. The border covers
-        // the probes' overshoot past the grid plus the range. A probe farther out than `range + 3` is moved in
-        // to that distance: no shift in range brings it onto the grid either way.
+    }
+
+    /// Copies the kept bins into a zero-padded grid so that no shift up to `range` needs a bounds check, and
+    /// indexes the probes into it; returns the padded grid's width. The border covers the probes' overshoot past
+    /// the grid plus the range. A probe farther out than `range + 3` is moved in to that distance: no shift in
+    /// range brings it onto the grid either way.
+    fn pad_grid(&mut self, bins: &EventBins, range: i64) -> i64 {
+        let (wi, hi) = (i64::from(bins.width), i64::from(bins.height));
         let overshoot = self
             .probes
             .iter()
@@ -99,19 +134,25 @@ impl ShiftSearch {
                 ((j + pad) * wp + i + pad) as usize
             })
         }));
-        let (padded, probe_index) = (&self.padded, &self.probe_index);
-        let score = |di: i64, dj: i64| -> i64 {
-            let off = dj * wp + di;
-            let at = |k: usize| i64::from(padded[(k as i64 + off) as usize]);
-            probe_index
-                .iter()
-                .map(|q| at(q[0]) + at(q[1]) - at(q[2]) - at(q[3]))
-                .sum()
-        };
-        let base = score(0, 0);
+        wp
+    }
+
+    /// The best of the shifts every `coarse` bins up to `range` (score, shift in bins), the unshifted outline
+    /// scoring `base`. With a known motion direction `motion_dir` and a `slack` above 0, among the shifts within
+    /// `slack` of the best the one that moves the outline least across the motion (then least along it) wins;
+    /// `scale` is the grid's bins per full-image pixel (x, y).
+    #[allow(clippy::too_many_arguments)]
+    fn coarse_scan(
+        &mut self,
+        range: i64,
+        coarse: i64,
+        wp: i64,
+        base: i64,
+        slack: i64,
+        motion_dir: Option<[f64; 2]>,
+        (sx, sy): (f64, f64),
+    ) -> (i64, i64, i64) {
         let mut best = (base, 0i64, 0i64);
-        let coarse = 3i64;
-        let slack = (term.search_aperture_tolerance * (2 * self.probes.len()) as f64) as i64;
         let keep_scores = slack > 0 && motion_dir.is_some();
         let side = (2 * range / coarse + 2) as usize;
         self.shift_scores.clear();
@@ -122,7 +163,7 @@ impl ShiftSearch {
         while dj <= range {
             let mut di = -range;
             while di <= range {
-                let v = score(di, dj);
+                let v = score(&self.padded, &self.probe_index, wp, di, dj);
                 if keep_scores {
                     self.shift_scores.push((v, di, dj));
                 }
@@ -151,19 +192,17 @@ impl ShiftSearch {
                 }
             }
         }
-        let (ci, cj) = (best.1, best.2);
-        let mut fine = best;
-        for dj in (cj - coarse + 1).max(-range)..(cj + coarse).min(range + 1) {
-            for di in (ci - coarse + 1).max(-range)..(ci + coarse).min(range + 1) {
-                let v = score(di, dj);
-                if v > fine.0 {
-                    fine = (v, di, dj);
-                }
-            }
-        }
-        let best = fine;
-        let gain = (best.0 - base) as f64 / (2 * self.probes.len()) as f64;
-        (gain >= term.search_min_gain && (best.1, best.2) != (0, 0))
-            .then(|| [best.1 as f64 / sx, best.2 as f64 / sy])
+        best
     }
+}
+
+/// How well the outline shifted by (`di`, `dj`) bins separates events inside from none outside: the inside probes'
+/// kept bins less the outside ones', over every contour point (`probe_index` into `padded`, `wp` wide).
+fn score(padded: &[u8], probe_index: &[[usize; 4]], wp: i64, di: i64, dj: i64) -> i64 {
+    let off = dj * wp + di;
+    let at = |k: usize| i64::from(padded[(k as i64 + off) as usize]);
+    probe_index
+        .iter()
+        .map(|q| at(q[0]) + at(q[1]) - at(q[2]) - at(q[3]))
+        .sum()
 }

@@ -11,7 +11,9 @@ pub(super) fn grid_index(x: f64) -> i64 {
 }
 
 /// How events become residuals.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum EventTermKind {
     /// Correspondence lines: along each contour point's image normal, the step from "events" (inside: the object's
@@ -29,7 +31,9 @@ pub enum EventTermKind {
 }
 
 /// Parameters of the event term.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
 #[serde(deny_unknown_fields, default)]
 pub struct EventTerm {
     /// Which residual the events give.

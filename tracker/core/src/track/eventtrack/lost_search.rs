@@ -2,8 +2,11 @@
 //! clusters of the depth image (see [`crate::track::redetect`]), then carried out a few places per tick, each
 //! place tried with a depth-only refinement against that frame.
 
-use super::EventTrack6d;
-use super::place_check::{PlaceCheck, PlaceResult, ProbeSet};
+use super::counters::TrackerCounters;
+use super::place_check::{PendingPlace, PlaceCheck, PlaceResult, ProbeSet};
+use super::renderers::Renderers;
+use super::setup::TrackingRig;
+use crate::recon::EventSurface;
 use crate::track::TrackingState;
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::object::{ObjectTrack, TickInputs};
@@ -13,16 +16,6 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use scene::geometry::PinholeCamera;
 use scene::render::SceneObject;
 use std::collections::VecDeque;
-
-/// One place to check for one object.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct PendingPlace {
-    pub(super) object: usize,
-    /// Start of the depth-only refinement, `T_cam_obj`.
-    pub(super) start: Isometry3<f64>,
-    /// Whether this is where the tracker estimated the object at the frame's exposure (the score to beat).
-    pub(super) estimated: bool,
-}
 
 /// One object's search in progress.
 #[derive(Debug, Clone, Copy, Default)]
@@ -57,6 +50,15 @@ pub(super) struct Redetection {
     pub(super) results: Vec<PlaceResult>,
     /// Scratch tracks for the checks, one set per renderer (thread).
     pub(super) probes: Vec<ProbeSet>,
+}
+
+/// The depth frame a search's places are checked against, and what the checks read beside it.
+pub(super) struct SearchFrame<'a> {
+    pub config: &'a TrackerConfig,
+    pub rig: &'a TrackingRig,
+    /// The depth frame the places were planned on (the tracker's latest).
+    pub depth: &'a DepthFrame,
+    pub surface: &'a EventSurface,
 }
 
 impl Redetection {
@@ -96,22 +98,30 @@ impl Redetection {
             self.background_behind = false;
         }
     }
-}
 
-impl EventTrack6d {
     /// At a depth frame exposed at `exposed_us` and used at the tick `t_us`: plans the search for every object
     /// that needs one (not `tracking`, and not merely partly hidden; see
-    /// [`crate::track::object::ObjectTrack::needs_search`]): where it was estimated at the exposure (predicted,
+    /// [`crate::track::object::ObjectState::needs_search`]): where it was estimated at the exposure (predicted,
     /// for a frame on time), then the object-sized clusters of foreground (with that orientation and with its
     /// longest axis along the cluster's). A late frame shows where the object was at its exposure, so it is
     /// searched for there; an object whose estimates do not reach back to the exposure is not searched for on
     /// that frame. Places left over from the previous frame are dropped and counted.
-    pub(super) fn plan_redetection(&mut self, t_us: i64, exposed_us: i64) {
-        let cfg = self.config.redetect;
-        let r = &mut self.redetection;
-        self.counters.redetect_places_dropped += r.pending.len() as u64;
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn plan(
+        &mut self,
+        config: &TrackerConfig,
+        counters: &mut TrackerCounters,
+        depth: &DepthFrame,
+        rig: &TrackingRig,
+        objects: &[ObjectTrack],
+        t_us: i64,
+        exposed_us: i64,
+    ) {
+        let cfg = config.redetect;
+        let r = self;
+        counters.redetect_places_dropped += r.pending.len() as u64;
         r.pending.clear();
-        r.frame = Some((self.depth.index, exposed_us));
+        r.frame = Some((depth.index, exposed_us));
         let at_frame = |o: &ObjectTrack| {
             if exposed_us < t_us {
                 o.state.history.at(exposed_us)
@@ -119,29 +129,20 @@ impl EventTrack6d {
                 Some(o.state.predicted)
             }
         };
-        for (s, o) in r.scene.iter_mut().zip(&self.objects) {
+        for (s, o) in r.scene.iter_mut().zip(objects) {
             s.pose = at_frame(o).unwrap_or(o.state.predicted);
         }
         let mut foreground_ready = false;
-        for k in 0..self.objects.len() {
-            let o = &self.objects[k];
+        for (k, o) in objects.iter().enumerate() {
             r.searches[k] = Search::default();
-            if !o.state.needs_search(&self.config.quality) || t_us < o.state.t_us {
+            if !o.state.needs_search(&config.quality) || t_us < o.state.t_us {
                 continue;
             }
             let Some(here) = at_frame(o) else {
                 continue;
             };
             if !foreground_ready {
-                r.catch_up(&self.depth);
-                r.foreground.clear();
-                let noise = self.config.depth_term;
-                let margin = |z: f64| {
-                    let sigma = noise.sigma_0 + noise.sigma_z2 * z * z;
-                    cfg.foreground_margin_m.max(cfg.foreground_sigmas * sigma)
-                };
-                r.background
-                    .foreground(&self.depth, &self.rig.depth, margin, &mut r.foreground);
+                r.find_foreground(config, depth, rig);
                 foreground_ready = true;
             }
             r.centres.clear();
@@ -154,58 +155,87 @@ impl EventTrack6d {
                 &mut r.seeds,
                 &mut r.centres,
             );
-            if r.centres.is_empty() {
+            if !r.centres.is_empty() {
+                r.queue_places(k, o, &here, config, rig);
+            }
+        }
+    }
+
+    /// The foreground of the latest depth frame against the learned background (the background caught up
+    /// first), into `self.foreground`.
+    fn find_foreground(&mut self, config: &TrackerConfig, depth: &DepthFrame, rig: &TrackingRig) {
+        let cfg = config.redetect;
+        self.catch_up(depth);
+        self.foreground.clear();
+        let noise = config.depth_term;
+        let margin = |z: f64| {
+            let sigma = noise.sigma_0 + noise.sigma_z2 * z * z;
+            cfg.foreground_margin_m.max(cfg.foreground_sigmas * sigma)
+        };
+        self.background
+            .foreground(depth, &rig.depth, margin, &mut self.foreground);
+    }
+
+    /// Queues the places of object `k` (track `o`, estimated at `here` at the frame's exposure): `here` first,
+    /// then each foreground cluster in `self.centres` away from it and large enough for the object, with the
+    /// estimated orientation and with the object's longest axis laid along the cluster's.
+    fn queue_places(
+        &mut self,
+        k: usize,
+        o: &ObjectTrack,
+        here: &Isometry3<f64>,
+        config: &TrackerConfig,
+        rig: &TrackingRig,
+    ) {
+        let cfg = config.redetect;
+        let here_centre = o.model.center_at(here);
+        // Samples the object's two largest box extents cover at 1 m.
+        let size = o.model.aabb_max - o.model.aabb_min;
+        // The object's longest box axis, object frame.
+        let long_axis = Vector3::ith_axis(size.imax()).into_inner();
+        let mut extent = size.data.0[0];
+        extent.sort_by(|a, b| b.total_cmp(a));
+        let min_support = cfg.min_support
+            * extent[0]
+            * extent[1]
+            * self.background.samples_per_m2_at_1m(&rig.depth);
+        let before = self.pending.len();
+        self.pending.push_back(PendingPlace {
+            object: k,
+            start: *here,
+            estimated: true,
+        });
+        for cluster in &self.centres {
+            let centre = cluster.centre;
+            if (centre - here_centre).norm() < 0.25 * o.model.diameter
+                || (cluster.support as f64)
+                    < (min_support / (centre.z * centre.z).max(1e-6)).max(8.0)
+            {
                 continue;
             }
-            let here_centre = o.model.center_at(&here);
-            // Samples the object's two largest box extents cover at 1 m.
-            let size = o.model.aabb_max - o.model.aabb_min;
-            // The object's longest box axis, object frame.
-            let long_axis = Vector3::ith_axis(size.imax()).into_inner();
-            let mut extent = size.data.0[0];
-            extent.sort_by(|a, b| b.total_cmp(a));
-            let min_support = cfg.min_support
-                * extent[0]
-                * extent[1]
-                * r.background.samples_per_m2_at_1m(&self.rig.depth);
-            let before = r.pending.len();
-            r.pending.push_back(PendingPlace {
-                object: k,
-                start: here,
-                estimated: true,
-            });
-            for cluster in &r.centres {
-                let centre = cluster.centre;
-                if (centre - here_centre).norm() < 0.25 * o.model.diameter
-                    || (cluster.support as f64)
-                        < (min_support / (centre.z * centre.z).max(1e-6)).max(8.0)
-                {
-                    continue;
-                }
-                // Orientations: the estimated one, and the estimated one turned the least that lays the
-                // object's longest axis along the cluster's principal axis.
-                let current = here.rotation * long_axis;
-                let target = if current.dot(&cluster.axis) >= 0.0 {
-                    cluster.axis
-                } else {
-                    -cluster.axis
-                };
-                let aligned = UnitQuaternion::rotation_between(&current, &target)
-                    .map(|q| q * here.rotation)
-                    .filter(|_| current.angle(&target) > 15f64.to_radians());
-                for rotation in [Some(here.rotation), aligned].into_iter().flatten() {
-                    r.pending.push_back(PendingPlace {
-                        object: k,
-                        start: Isometry3::from_parts(
-                            Translation3::from(centre.coords - rotation * o.model.center_obj),
-                            rotation,
-                        ),
-                        estimated: false,
-                    });
-                }
+            // Orientations: the estimated one, and the estimated one turned the least that lays the object's
+            // longest axis along the cluster's principal axis.
+            let current = here.rotation * long_axis;
+            let target = if current.dot(&cluster.axis) >= 0.0 {
+                cluster.axis
+            } else {
+                -cluster.axis
+            };
+            let aligned = UnitQuaternion::rotation_between(&current, &target)
+                .map(|q| q * here.rotation)
+                .filter(|_| current.angle(&target) > 15f64.to_radians());
+            for rotation in [Some(here.rotation), aligned].into_iter().flatten() {
+                self.pending.push_back(PendingPlace {
+                    object: k,
+                    start: Isometry3::from_parts(
+                        Translation3::from(centre.coords - rotation * o.model.center_obj),
+                        rotation,
+                    ),
+                    estimated: false,
+                });
             }
-            r.searches[k].remaining = r.pending.len() - before;
         }
+        self.searches[k].remaining = self.pending.len() - before;
     }
 
     /// Checks up to `places_per_tick` pending places (all of them when it is 0, or for a tracker that refines only
@@ -214,20 +244,29 @@ impl EventTrack6d {
     /// search is abandoned when the object is `tracking` again. Every check sees the other objects where they were
     /// at the frame's exposure; the moves are made after all of them. A place found on a late frame is where the
     /// object was at its exposure ([`ObjectTrack::relocate_on`] says how it is carried on).
-    pub(super) fn continue_redetection(&mut self, dt_s: f64) {
-        let cfg = self.config.redetect;
+    pub(super) fn continue_search(
+        &mut self,
+        frame: &SearchFrame<'_>,
+        counters: &mut TrackerCounters,
+        objects: &mut [ObjectTrack],
+        scene: &mut [SceneObject],
+        renderers: &mut Renderers,
+        dt_s: f64,
+    ) {
+        let config = frame.config;
+        let cfg = config.redetect;
         // A tracker that refines only at depth frames (`depth30`) has no ticks in between to spread over.
-        let budget = if cfg.places_per_tick == 0 || self.config.depth == DepthUse::DepthFramesOnly {
+        let budget = if cfg.places_per_tick == 0 || config.depth == DepthUse::DepthFramesOnly {
             usize::MAX
         } else {
             cfg.places_per_tick
         };
-        let Some((frame_index, frame_t_us)) = self.redetection.frame else {
+        let Some((frame_index, frame_t_us)) = self.frame else {
             return;
         };
-        let r = &mut self.redetection;
-        if frame_index != self.depth.index {
-            self.counters.redetect_places_dropped += r.pending.len() as u64;
+        let r = self;
+        if frame_index != frame.depth.index {
+            counters.redetect_places_dropped += r.pending.len() as u64;
             r.pending.clear();
             return;
         }
@@ -236,7 +275,7 @@ impl EventTrack6d {
             let Some(place) = r.pending.pop_front() else {
                 break;
             };
-            if self.objects[place.object].state.tracking == TrackingState::Tracking {
+            if objects[place.object].state.tracking == TrackingState::Tracking {
                 r.searches[place.object].remaining -= 1;
                 continue;
             }
@@ -245,32 +284,26 @@ impl EventTrack6d {
         if r.checks.is_empty() {
             return;
         }
-        self.counters.redetect_places_checked += r.checks.len() as u64;
+        counters.redetect_places_checked += r.checks.len() as u64;
         r.results.clear();
         r.results.resize(r.checks.len(), None);
         let check = PlaceCheck {
-            objects: &self.objects,
+            objects,
             scene: &r.scene,
-            camera: &self.rig.event_camera,
-            config: &self.config,
+            camera: &frame.rig.event_camera,
+            config,
             inputs: TickInputs {
                 t_us: frame_t_us,
                 dt_s,
-                depth: Some(&self.depth),
+                depth: Some(frame.depth),
                 depth_exposed_us: frame_t_us,
-                surface: &self.surface,
-                camera: &self.rig.event_camera,
-                depth_rig: &self.rig.depth,
+                surface: frame.surface,
+                camera: &frame.rig.event_camera,
+                depth_rig: &frame.rig.depth,
             },
         };
-        self.counters.render_errors += check.run_split(
-            &r.checks,
-            &mut r.results,
-            &mut r.probes,
-            self.renderer.as_mut(),
-            &mut self.workers,
-            &mut self.threads,
-        );
+        counters.render_errors +=
+            check.run_split(&r.checks, &mut r.results, &mut r.probes, renderers);
         for (place, result) in r.checks.iter().zip(&r.results) {
             let k = place.object;
             let search = &mut r.searches[k];
@@ -287,9 +320,9 @@ impl EventTrack6d {
                 && score >= cfg.min_score
                 && score > search.here + cfg.margin
             {
-                let o = &mut self.objects[k];
-                o.relocate_on(&self.depth, &self.rig.depth, pose, frame_t_us, &self.config);
-                self.scene[k].pose = o.state.predicted;
+                let o = &mut objects[k];
+                o.relocate_on(frame.depth, &frame.rig.depth, pose, frame_t_us, config);
+                scene[k].pose = o.state.predicted;
             }
         }
     }

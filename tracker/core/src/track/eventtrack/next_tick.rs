@@ -1,5 +1,7 @@
 //! When the next tick will come, from the times of the last ones: what the renders prefetched for it assume.
 
+use crate::track::clock::TickClock;
+
 /// Tick periods remembered, microseconds.
 const HISTORY: usize = 8;
 /// Longest repeating pattern of periods looked for (a 120 Hz timeline on a 1 us clock repeats 8333, 8333, 8334).
@@ -8,23 +10,25 @@ const LONGEST_CYCLE: usize = 4;
 /// The recent tick periods and the guesses they give for the next tick's time.
 #[derive(Debug, Clone)]
 pub(super) struct NextTick {
+    /// The nominal period, microseconds: the guess before two ticks were seen.
+    nominal_us: f64,
     last_us: Option<i64>,
     /// The latest periods, oldest first (a ring of [`HISTORY`] once full).
     periods: [i64; HISTORY],
     count: usize,
 }
 
-impl Default for NextTick {
-    fn default() -> Self {
+impl NextTick {
+    /// No tick seen yet, on `clock`.
+    pub(super) fn new(clock: TickClock) -> Self {
         Self {
+            nominal_us: clock.period_us(),
             last_us: None,
             periods: [0; HISTORY],
             count: 0,
         }
     }
-}
 
-impl NextTick {
     /// Records a tick at `t_us`.
     pub(super) fn record(&mut self, t_us: i64) {
         if let Some(last) = self.last_us {
@@ -51,7 +55,7 @@ impl NextTick {
             }
         }
         let mean = if recent.is_empty() {
-            1e6 / 120.0
+            self.nominal_us
         } else {
             recent.iter().sum::<i64>() as f64 / recent.len() as f64
         };
@@ -83,7 +87,7 @@ mod tests {
         ) {
             let period = whole as f64 / cycle as f64;
             let t = |k: i64| start + (k as f64 * period + phase).round() as i64;
-            let mut n = NextTick::default();
+            let mut n = NextTick::new(TickClock::default());
             for k in 0..40 {
                 if k > 2 * cycle {
                     prop_assert_eq!(guesses(&n), vec![t(k)]);
@@ -95,7 +99,7 @@ mod tests {
         /// Jitter breaks the pattern: then the two whole microseconds around the mean period.
         #[test]
         fn an_irregular_timeline_gets_two_neighbouring_guesses(jitter in proptest::collection::vec(-3i64..=3, 9)) {
-            let mut n = NextTick::default();
+            let mut n = NextTick::new(TickClock::default());
             let mut t = 0;
             for j in &jitter {
                 t += 8_333 + j;
@@ -117,7 +121,7 @@ mod tests {
 
     #[test]
     fn repeated_ticks_and_no_ticks() {
-        let mut n = NextTick::default();
+        let mut n = NextTick::new(TickClock::default());
         assert!(guesses(&n).is_empty());
         n.record(500);
         // One tick: a nominal 120 Hz period.
@@ -128,7 +132,7 @@ mod tests {
         n.record(500);
         assert_eq!(guesses(&n), vec![500]);
         // 120 Hz after one period: 8333 or 8334.
-        let mut n = NextTick::default();
+        let mut n = NextTick::new(TickClock::default());
         n.record(500);
         n.record(8_833);
         assert_eq!(guesses(&n), vec![17_166, 17_167]);

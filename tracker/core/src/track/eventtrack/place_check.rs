@@ -4,13 +4,23 @@
 //! every check reads only shared inputs and writes only its probe and its result, so the split changes nothing in
 //! the results.
 
-use super::lost_search::PendingPlace;
-use super::threads::{ObjectThreads, ShareRenderers, ShareSlice};
+use super::renderers::Renderers;
+use super::threads::{ShareRenderers, ShareSlice};
 use crate::track::config::TrackerConfig;
 use crate::track::object::{ObjectTrack, TickInputs};
 use nalgebra::Isometry3;
 use scene::geometry::PinholeCamera;
 use scene::render::{RenderTarget, Renderer, Scene, SceneObject};
+
+/// One place to check for one object.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct PendingPlace {
+    pub(super) object: usize,
+    /// Start of the depth-only refinement, `T_cam_obj`.
+    pub(super) start: Isometry3<f64>,
+    /// Whether this is where the tracker estimated the object at the frame's exposure (the score to beat).
+    pub(super) estimated: bool,
+}
 
 /// A checked place's score, in [0, 1], and the pose its refinement reached (`T_cam_obj`); `None` when nothing of
 /// the object could be rendered or matched there.
@@ -130,10 +140,14 @@ impl PlaceCheck<'_> {
         places: &[PendingPlace],
         results: &mut [PlaceResult],
         sets: &mut [ProbeSet],
-        renderer: &mut dyn Renderer,
-        workers: &mut [Box<dyn Renderer + Send>],
-        threads: &mut ObjectThreads,
+        renderers: &mut Renderers,
     ) -> u64 {
+        let Renderers {
+            main: renderer,
+            workers,
+            threads,
+        } = renderers;
+        let renderer = renderer.as_mut();
         if sets.is_empty() {
             return 0;
         }

@@ -10,9 +10,8 @@
 //! unless they take longer than the time left until it. A frame that cannot be placed then (no state at its
 //! exposure, or its events left the log) is left to the next tick, which carries it and counts it.
 
-use super::EventTrack6d;
+use super::engine::TickEngine;
 use crate::recon::SurfaceLog;
-use crate::track::PoseTracker;
 use crate::track::object::ObjectState;
 use crate::track::{DepthFallbackCheck, PoseEstimate};
 use drivers::timeline::Tick;
@@ -31,9 +30,6 @@ pub(super) enum Deferred {
     /// The next tick carries it, and it is not tracked again (the caller has fallen behind).
     CarryOnly,
 }
-
-/// Half a tick period, microseconds: a depth frame belongs to the tick whose time is this close to its exposure.
-const SAME_TICK_US: i64 = 4_200;
 
 /// The tracker's state at one depth-exposure tick, before that tick ran.
 #[derive(Debug)]
@@ -61,9 +57,11 @@ pub(super) struct Retrack {
     /// The poses of the ticks tracked again (not published: those ticks' poses are out already).
     replayed: Vec<PoseEstimate>,
     /// The depth safety net's checks made while tracking again before the latest tick, reported as that tick's.
-    pub(super) checks: Vec<DepthFallbackCheck>,
+    checks: Vec<DepthFallbackCheck>,
     /// Checks made while tracking again at a frame's arrival, reported with the next tick.
     arrival_checks: Vec<DepthFallbackCheck>,
+    /// The earliest tick tracked again since the last [`Self::take_revision`], microseconds.
+    revised_since: Option<i64>,
 }
 
 impl Retrack {
@@ -77,7 +75,13 @@ impl Retrack {
             replayed: Vec::new(),
             checks: Vec::new(),
             arrival_checks: Vec::new(),
+            revised_since: None,
         }
+    }
+
+    /// The earliest tick whose estimate was tracked again since the last call, microseconds.
+    pub(super) fn take_revision(&mut self) -> Option<i64> {
+        self.revised_since.take()
     }
 
     /// Whether any state is kept (events must then be logged).
@@ -128,143 +132,121 @@ impl Retrack {
     }
 }
 
-impl EventTrack6d {
-    /// When a depth frame arrives (it is waiting in `depth_t_us`): if it was exposed at a tick already run whose
-    /// state was saved, and the events since are still logged, tracks the ticks from that one to the latest
-    /// again with the frame in place (the frame is used up), and starts the next tick's renders from the new
-    /// estimates. Otherwise the frame waits for the next tick ([`Self::retrack_before`]).
-    pub(super) fn retrack_on_arrival(&mut self) {
-        let (Some(exposed_us), Some(last_us)) = (self.depth_t_us, self.last_tick_us) else {
-            return;
+impl Retrack {
+    /// When a depth frame arrives (it is waiting in `engine.depth_t_us`): if it was exposed at a tick already run
+    /// whose state was saved, and the events since are still logged, tracks the ticks from that one to the latest
+    /// again with the frame in place (the frame is used up). Returns whether it did: the next tick's renders are
+    /// then to be started from the new estimates. Otherwise the frame waits for the next tick
+    /// ([`Self::before_tick`]).
+    pub(super) fn on_arrival(&mut self, engine: &mut TickEngine) -> bool {
+        let (Some(exposed_us), Some(last_us)) = (engine.depth_t_us, engine.last_tick_us) else {
+            return false;
         };
-        let Some(mut retrack) = self.retrack.take() else {
-            return;
+        let max_age_us = (engine.config.max_depth_age_ms * 1e3) as i64;
+        let (times, count) = engine.next_tick.candidates();
+        let next_us = if count > 0 {
+            times[0]
+        } else {
+            last_us + engine.rig.clock.whole_period_us()
         };
-        let max_age_us = (self.config.max_depth_age_ms * 1e3) as i64;
-        let (times, count) = self.next_tick.candidates();
-        let next_us = if count > 0 { times[0] } else { last_us + 8_333 };
         // The next tick would find the frame too old and drop it: it is not used here either.
         let fresh = next_us - exposed_us <= max_age_us;
-        if fresh && let Some(k) = self.retrack_start(&retrack, exposed_us) {
-            let mut checks = std::mem::take(&mut retrack.arrival_checks);
-            self.track_again(&mut retrack, k, last_us + 1, &mut checks);
-            retrack.arrival_checks = checks;
-            self.retrack = Some(retrack);
-            self.prepared = false;
-            self.prepare_next_tick();
-        } else {
-            self.retrack = Some(retrack);
-        }
+        let Some(k) = self.start(engine, exposed_us).filter(|_| fresh) else {
+            return false;
+        };
+        let mut checks = std::mem::take(&mut self.arrival_checks);
+        self.track_again(engine, k, last_us + 1, &mut checks);
+        self.arrival_checks = checks;
+        true
     }
 
-    /// After a tick carried the late frame exposed at `exposed_us` (handed over deferred): tracks the ticks from
-    /// its exposure to that tick again with it, as [`Self::retrack_on_arrival`] would have before the tick. The
-    /// frame was counted, and its safety-net check reported, by the tick that carried it.
-    pub(super) fn retrack_deferred(&mut self, exposed_us: i64) {
-        let counted = self.counters;
-        self.depth_t_us = Some(exposed_us);
-        self.retrack_on_arrival();
-        if self.depth_t_us.take().is_some() {
-            self.counters.late_frames_not_retracked += 1;
-            return;
-        }
-        self.counters.depth_frames = counted.depth_frames;
-        self.counters.depth_frames_late = counted.depth_frames_late;
-        if let Some(r) = self.retrack.as_mut() {
-            r.arrival_checks.clear();
-        }
+    /// Forgets the checks made while tracking again at an arrival (a frame carried at a tick, tracked again
+    /// after it: the tick reported its check).
+    pub(super) fn forget_arrival_checks(&mut self) {
+        self.arrival_checks.clear();
     }
 
     /// Before `tick` runs: if the depth frame waiting was exposed at an earlier tick whose state was saved, tracks
-    /// the ticks from that one to this one again with the frame in place (the frame is used up); then saves the
-    /// state if `tick` is a depth-exposure tick whose frame has not come.
-    pub(super) fn retrack_before(&mut self, tick: &Tick) {
-        let Some(mut retrack) = self.retrack.take() else {
-            return;
-        };
-        let max_age_us = (self.config.max_depth_age_ms * 1e3) as i64;
-        retrack.checks.clear();
+    /// the ticks from that one to this one again with the frame in place (the frame is used up), unless `defer`
+    /// says otherwise; then saves the state if `tick` is a depth-exposure tick whose frame has not come. Returns
+    /// what waits after the tick: [`Deferred::AfterTick`] for a frame handed over deferred that this tick carries.
+    pub(super) fn before_tick(
+        &mut self,
+        engine: &mut TickEngine,
+        tick: &Tick,
+        defer: Deferred,
+    ) -> Deferred {
+        let max_age_us = (engine.config.max_depth_age_ms * 1e3) as i64;
+        let half = engine.rig.clock.half_period_us();
+        self.checks.clear();
         // Checks made when a frame arrived since the last tick are this tick's.
-        let arrival_checks = retrack
-            .arrival_checks
-            .drain(..)
-            .map(|c| DepthFallbackCheck {
-                tick_us: tick.t_us,
-                ..c
-            });
-        retrack.checks.extend(arrival_checks);
-        let defer = self.deferred;
-        self.deferred = Deferred::No;
-        if let Some(exposed_us) = self.depth_t_us
-            && exposed_us < tick.t_us - SAME_TICK_US
+        let arrival_checks = self.arrival_checks.drain(..).map(|c| DepthFallbackCheck {
+            tick_us: tick.t_us,
+            ..c
+        });
+        self.checks.extend(arrival_checks);
+        let mut after = Deferred::No;
+        if let Some(exposed_us) = engine.depth_t_us
+            && exposed_us < tick.t_us - half
             && tick.t_us - exposed_us <= max_age_us
         {
-            match self.retrack_start(&retrack, exposed_us) {
+            match self.start(engine, exposed_us) {
                 // This tick carries the frame; tracking again waits until its poses are out.
-                Some(_) if defer == Deferred::BeforeTick => {
-                    self.deferred = Deferred::AfterTick(exposed_us);
-                }
+                Some(_) if defer == Deferred::BeforeTick => after = Deferred::AfterTick(exposed_us),
                 // Carried at this tick only: counted like a frame that could not be tracked again.
                 Some(_) if defer == Deferred::CarryOnly => {
-                    self.counters.late_frames_not_retracked += 1;
+                    engine.counters.late_frames_not_retracked += 1;
                 }
                 Some(k) => {
-                    let mut checks = std::mem::take(&mut retrack.checks);
-                    self.track_again(&mut retrack, k, tick.t_us, &mut checks);
-                    retrack.checks = checks;
+                    let mut checks = std::mem::take(&mut self.checks);
+                    self.track_again(engine, k, tick.t_us, &mut checks);
+                    self.checks = checks;
                 }
-                None => self.counters.late_frames_not_retracked += 1,
+                None => engine.counters.late_frames_not_retracked += 1,
             }
         }
-        let frame_here = self
+        let frame_here = engine
             .depth_t_us
-            .is_some_and(|td| (td - tick.t_us).abs() <= SAME_TICK_US);
+            .is_some_and(|td| (td - tick.t_us).abs() <= half);
         // A clock that stood still or went back (a restarted replay) invalidates what was kept since.
-        retrack.forget_from(tick.t_us);
+        self.forget_from(tick.t_us);
         if tick.depth_frame.is_some() && !frame_here && max_age_us > 0 {
-            let mut state = retrack.spare.pop().unwrap_or_else(|| ExposureState {
-                tick: *tick,
-                objects: self.objects.iter().map(|o| o.state.clone()).collect(),
-                scene: Vec::with_capacity(self.scene.len()),
-                last_tick_us: None,
-                events_before: 0,
-            });
-            if retrack.states.is_empty() {
-                // Events came unlogged until now: no earlier position is reachable.
-                retrack.log.forget_before(retrack.log.end());
-            }
-            self.save_state(tick, &mut state);
-            state.events_before = retrack.log.end();
-            retrack.states.push_back(state);
+            self.save_before(engine, tick);
         }
-        if retrack.is_logging() {
-            retrack.ticks.push_back((*tick, retrack.log.end()));
+        if self.is_logging() {
+            self.ticks.push_back((*tick, self.log.end()));
         }
-        retrack.forget_before(tick.t_us, max_age_us);
-        self.retrack = Some(retrack);
+        self.forget_before(tick.t_us, max_age_us);
+        after
     }
 
-    /// Saves the tracker's state before `tick` into `state`, reusing its buffers.
-    fn save_state(&self, tick: &Tick, state: &mut ExposureState) {
-        state.tick = *tick;
-        for (o, s) in self.objects.iter().zip(&mut state.objects) {
-            s.clone_from(&o.state);
+    /// Saves the engine's state before the depth-exposure `tick`, whose frame has not come, reusing a spare slot.
+    fn save_before(&mut self, engine: &TickEngine, tick: &Tick) {
+        let mut state = self.spare.pop().unwrap_or_else(|| ExposureState {
+            tick: *tick,
+            objects: engine.objects.iter().map(|o| o.state.clone()).collect(),
+            scene: Vec::with_capacity(engine.scene.len()),
+            last_tick_us: None,
+            events_before: 0,
+        });
+        if self.states.is_empty() {
+            // Events came unlogged until now: no earlier position is reachable.
+            self.log.forget_before(self.log.end());
         }
-        state.scene.clone_from(&self.scene);
-        state.last_tick_us = self.last_tick_us;
+        save_state(engine, tick, &mut state);
+        state.events_before = self.log.end();
+        self.states.push_back(state);
     }
 
     /// The index of the state saved at the tick of a frame exposed at `exposed_us`, if there is one and the event
     /// log still reaches back to it.
-    fn retrack_start(&self, retrack: &Retrack, exposed_us: i64) -> Option<usize> {
-        let k = retrack
+    fn start(&self, engine: &TickEngine, exposed_us: i64) -> Option<usize> {
+        let half = engine.rig.clock.half_period_us();
+        let k = self
             .states
             .iter()
-            .position(|s| (s.tick.t_us - exposed_us).abs() <= SAME_TICK_US)?;
-        retrack
-            .log
-            .reaches(retrack.states[k].events_before)
-            .then_some(k)
+            .position(|s| (s.tick.t_us - exposed_us).abs() <= half)?;
+        self.log.reaches(self.states[k].events_before).then_some(k)
     }
 
     /// Tracks the ticks from the one of state `k` to just before `now_us` again, with the waiting depth frame used
@@ -272,48 +254,49 @@ impl EventTrack6d {
     /// go into `checks`, stamped `now_us`.
     fn track_again(
         &mut self,
-        retrack: &mut Retrack,
+        engine: &mut TickEngine,
         k: usize,
         now_us: i64,
         checks: &mut Vec<DepthFallbackCheck>,
     ) {
-        let start_us = retrack.states[k].tick.t_us;
-        let wound = self
+        let start_us = self.states[k].tick.t_us;
+        let wound = engine
             .surface
-            .wind_back(&mut retrack.log, retrack.states[k].events_before);
+            .wind_back(&mut self.log, self.states[k].events_before);
         debug_assert!(
             wound,
             "retrack_start checked that the log reaches the state"
         );
         {
-            let state = &retrack.states[k];
-            for (o, s) in self.objects.iter_mut().zip(&state.objects) {
+            let state = &self.states[k];
+            for (o, s) in engine.objects.iter_mut().zip(&state.objects) {
                 o.state.clone_from(s);
             }
-            self.scene.clone_from(&state.scene);
-            self.last_tick_us = state.last_tick_us;
+            engine.scene.clone_from(&state.scene);
+            engine.last_tick_us = state.last_tick_us;
         }
         // The frame is treated as on time at its tick; what the replayed ticks count is not counted again.
-        let counted = self.counters;
-        self.depth_t_us = Some(start_us);
+        let counted = engine.counters;
+        engine.depth_t_us = Some(start_us);
         let mut ticks = 0;
-        let mut i = retrack.ticks.partition_point(|(t, _)| t.t_us < start_us);
-        while let Some(&(tick, events_before)) = retrack.ticks.get(i) {
+        let mut i = self.ticks.partition_point(|(t, _)| t.t_us < start_us);
+        while let Some(&(tick, events_before)) = self.ticks.get(i) {
             if tick.t_us >= now_us {
                 break;
             }
-            self.surface.wind_forward(&mut retrack.log, events_before);
+            engine.surface.wind_forward(&mut self.log, events_before);
             if tick.t_us > start_us
-                && let Some(state) = retrack.states.iter_mut().find(|s| s.tick.t_us == tick.t_us)
+                && let Some(state) = self.states.iter_mut().find(|s| s.tick.t_us == tick.t_us)
             {
                 // A later exposure's state, saved before this frame was in place: save it again.
-                self.save_state(&tick, state);
+                save_state(engine, &tick, state);
             }
-            retrack.replayed.clear();
-            self.step_tick(&tick, &mut retrack.replayed, false);
+            self.replayed.clear();
+            engine.step_tick(&tick, &mut self.replayed, false);
             // The safety net's checks of the frame, made now: reported with the tick that made them.
             checks.extend(
-                self.objects
+                engine
+                    .objects
                     .iter()
                     .filter_map(|o| o.state.fallback_check)
                     .filter(|c| c.tick_us == tick.t_us)
@@ -325,14 +308,30 @@ impl EventTrack6d {
             ticks += 1;
             i += 1;
         }
-        self.surface.wind_forward(&mut retrack.log, u64::MAX);
-        retrack.drop_states_until(start_us);
-        self.depth_t_us = None;
-        self.counters.ticks = counted.ticks;
-        self.counters.depth_frames = counted.depth_frames + 1;
-        self.counters.depth_frames_late = counted.depth_frames_late + 1;
-        self.counters.depth_frames_unused = counted.depth_frames_unused;
-        self.counters.late_frames_retracked += 1;
-        self.counters.ticks_retracked += ticks;
+        engine.surface.wind_forward(&mut self.log, u64::MAX);
+        self.drop_states_until(start_us);
+        engine.depth_t_us = None;
+        engine.counters.ticks = counted.ticks;
+        engine.counters.depth_frames = counted.depth_frames + 1;
+        engine.counters.depth_frames_late = counted.depth_frames_late + 1;
+        engine.counters.depth_frames_unused = counted.depth_frames_unused;
+        engine.counters.late_frames_retracked += 1;
+        engine.counters.ticks_retracked += ticks;
+        self.revised_since = Some(self.revised_since.map_or(start_us, |t| t.min(start_us)));
     }
+
+    /// The depth safety net's checks made while tracking again before the latest tick, reported as that tick's.
+    pub(super) fn checks(&self) -> &[DepthFallbackCheck] {
+        &self.checks
+    }
+}
+
+/// Saves the engine's state before `tick` into `state`, reusing its buffers.
+fn save_state(engine: &TickEngine, tick: &Tick, state: &mut ExposureState) {
+    state.tick = *tick;
+    for (o, s) in engine.objects.iter().zip(&mut state.objects) {
+        s.clone_from(&o.state);
+    }
+    state.scene.clone_from(&engine.scene);
+    state.last_tick_us = engine.last_tick_us;
 }

@@ -1,6 +1,7 @@
 //! What a tracker is built from (the objects and the rig) and why building one can fail.
 
 use crate::recon::DepthRig;
+use crate::track::clock::TickClock;
 use nalgebra::Isometry3;
 use scene::geometry::PinholeCamera;
 use scene::mesh::{Mesh, Symmetry};
@@ -52,11 +53,13 @@ pub struct TrackedObject {
     pub symmetries: Vec<Symmetry>,
 }
 
-/// The cameras a tracker works with.
+/// The cameras a tracker works with, and the clock of the trigger that synchronises them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrackingRig {
     /// Event camera intrinsics (poses are in this camera's frame).
     pub event_camera: PinholeCamera,
     /// Depth camera and its extrinsics.
     pub depth: DepthRig,
+    /// The trigger's tick rate.
+    pub clock: TickClock,
 }

@@ -156,65 +156,20 @@ impl ObjectTrack {
         };
 
         // Optimise.
-        let (mut pose, mut depth_stats) =
+        let (pose, depth_stats) =
             optimise::optimise(model, state, scratch, inputs, config, &roi, &start);
 
-        // Assess: the safety net at a fresh depth frame (a late frame had its check at its exposure), the depth
-        // the frame leaves carried, then quality and state.
-        let roi_camera = inputs.camera.crop(&roi);
-        let mut measured_support = None;
-        if start.depth.fresh
-            && !start.late
-            && start.use_events
-            && config.depth_fallback_margin >= 0.0
-            && let Some(anchor) = state.anchor
-        {
-            let kept = safety_net::check(
-                model,
-                state,
-                scratch,
-                inputs,
-                config,
-                &roi_camera,
-                pose,
-                anchor,
-            );
-            pose = kept.pose;
-            depth_stats = Some(kept.depth_stats);
-            measured_support = Some(kept.event_support);
-        }
-        if start.depth.fresh {
-            state.depth_frames_used += 1;
-            state
-                .carried
-                .attach_to_object(&pose, &model.aabb_min, &model.aabb_max, 0.01);
-        }
-        let support = if start.use_events && state.image_speed(model, inputs.camera) > 150.0 {
-            measured_support.unwrap_or_else(|| {
-                scratch
-                    .edges
-                    .contour_support(&scratch.view, &pose, inputs.camera)
-            })
-        } else {
-            None
-        };
-        // A late frame's evidence is the weaker of its agreement at the exposure, with the pose checked there,
-        // and at the tick, where its object part agrees with the events' motion by construction but its
-        // background and hand stay where they were measured.
-        let fit = if start.late {
-            weaker_fit(start.late_fit, depth_stats)
-        } else {
-            depth_stats.filter(|_| start.depth.weight >= 1.0)
-        };
-        assess::finish(
+        // Assess.
+        assess_tick(
             model,
             state,
-            in_view(scratch),
+            scratch,
             inputs,
-            pose,
-            fit,
-            support,
             config,
+            &roi,
+            &start,
+            pose,
+            depth_stats,
         );
     }
 
@@ -261,4 +216,68 @@ impl ObjectTrack {
             config,
         );
     }
+}
+
+/// The assess phase after the optimisation: the depth safety net at a fresh depth frame (a late frame had its
+/// check at its exposure), the depth the frame leaves carried, then quality, state and the recorded estimate of
+/// `pose`; `depth_stats` are the depth term's counts at it.
+#[allow(clippy::too_many_arguments)]
+fn assess_tick(
+    model: &ObjectModel,
+    state: &mut ObjectState,
+    scratch: &TickScratch,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+    roi: &scene::geometry::Roi,
+    start: &start::Start,
+    mut pose: Isometry3<f64>,
+    mut depth_stats: Option<crate::refine::DepthTermStats>,
+) {
+    let roi_camera = inputs.camera.crop(roi);
+    let mut measured_support = None;
+    if start.depth.fresh
+        && !start.late
+        && start.use_events
+        && config.depth_fallback_margin >= 0.0
+        && let Some(anchor) = state.anchor
+    {
+        let kept = safety_net::check(
+            model,
+            state,
+            scratch,
+            inputs,
+            config,
+            &roi_camera,
+            pose,
+            anchor,
+        );
+        pose = kept.pose;
+        depth_stats = Some(kept.depth_stats);
+        measured_support = Some(kept.event_support);
+    }
+    if start.depth.fresh {
+        state.depth_frames_used += 1;
+        state
+            .carried
+            .attach_to_object(&pose, &model.aabb_min, &model.aabb_max, 0.01);
+    }
+    let support = if start.use_events && state.image_speed(model, inputs.camera) > 150.0 {
+        measured_support.unwrap_or_else(|| {
+            scratch
+                .edges
+                .contour_support(&scratch.view, &pose, inputs.camera)
+        })
+    } else {
+        None
+    };
+    // A late frame's evidence is the weaker of its agreement at the exposure, with the pose checked there, and
+    // at the tick, where its object part agrees with the events' motion by construction but its background and
+    // hand stay where they were measured.
+    let fit = if start.late {
+        weaker_fit(start.late_fit, depth_stats)
+    } else {
+        depth_stats.filter(|_| start.depth.weight >= 1.0)
+    };
+    let in_view = scratch.view.visible_pixels > 0;
+    assess::finish(model, state, in_view, inputs, pose, fit, support, config);
 }

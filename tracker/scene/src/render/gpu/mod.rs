@@ -25,10 +25,10 @@ use device::Gpu;
 use frame::{Targets, Uniforms, padded_row_bytes, push_words};
 use mesh::GpuMesh;
 use nalgebra::Isometry3;
-use pass::{backend, read_back, submit};
+use pass::{backend, submit};
 use pipeline::Pipelines;
-use readback::{UnpackJob, Unpacker};
-use request::{Instance, MapResult, PREFETCH_SLOTS, PrefetchSlot, RenderRequest};
+use readback::{MapResult, UnpackJob, Unpacker, read_back};
+use request::{Instance, PREFETCH_SLOTS, PrefetchSlot, RenderRequest};
 use std::sync::Arc;
 
 /// A renderer on `wgpu` over Vulkan: depth, normals, object mask and shaded intensity, matching [`CpuRenderer`]

@@ -2,12 +2,12 @@
 //! then waiting for it and unpacking the image into a [`RenderTarget`].
 
 use super::device::Gpu;
-use super::frame::{Targets, Uniforms, padded_row_bytes, unpack};
+use super::frame::{Targets, Uniforms, padded_row_bytes};
 use super::mesh::GpuMesh;
 use super::pipeline::Pipelines;
-use super::request::{MapResult, RenderRequest};
-use crate::geometry::PinholeCamera;
-use crate::render::{RenderError, RenderTarget};
+use super::readback::MapResult;
+use super::request::RenderRequest;
+use crate::render::RenderError;
 use std::sync::Arc;
 
 /// A backend error naming the adapter.
@@ -105,38 +105,4 @@ pub(super) fn submit(
         }
     });
     Ok(submission)
-}
-
-/// Waits for `submission` (or finds it done), unpacks the image `camera` sees from the mapped `readback` buffer
-/// into `target` and releases the mapping. The error says what failed (without the adapter's name).
-pub(super) fn read_back(
-    device: &wgpu::Device,
-    readback: &wgpu::Buffer,
-    mapped: &MapResult,
-    submission: Option<wgpu::SubmissionIndex>,
-    camera: &PinholeCamera,
-    target: &mut RenderTarget,
-) -> Result<(), String> {
-    let polled = device.poll(wgpu::PollType::Wait {
-        submission_index: submission,
-        timeout: None,
-    });
-    let map_result = mapped.lock().ok().and_then(|mut slot| slot.take());
-    polled.map_err(|e| format!("waiting for the GPU failed: {e}"))?;
-    match map_result {
-        Some(Ok(())) => {}
-        Some(Err(e)) => return Err(format!("reading the image back failed: {e}")),
-        None => return Err("the image read-back never completed".into()),
-    }
-    let (w, h) = (camera.width, camera.height);
-    let row_bytes = padded_row_bytes(w);
-    let slice = readback.slice(..u64::from(row_bytes) * u64::from(h));
-    target.reset(w, h);
-    target.camera = Some(*camera);
-    let unpacked = slice
-        .get_mapped_range()
-        .map(|view| unpack(&view, row_bytes as usize, target))
-        .map_err(|e| format!("mapping the read-back buffer failed: {e}"));
-    readback.unmap();
-    unpacked
 }

@@ -1,13 +1,49 @@
 //! A helper thread that waits for prefetched renders and unpacks them into CPU memory, so the image is ready when
 //! the tick that asks for it starts: the tick then only swaps render targets.
 
-use super::pass::read_back;
-use super::request::MapResult;
+use super::frame::{padded_row_bytes, unpack};
 use crate::geometry::PinholeCamera;
 use crate::render::RenderTarget;
 use std::sync::mpsc::{Receiver, SyncSender, sync_channel};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
+
+/// Result slot of a readback buffer's map request.
+pub(super) type MapResult = Arc<Mutex<Option<Result<(), wgpu::BufferAsyncError>>>>;
+
+/// Waits for `submission` (or finds it done), unpacks the image `camera` sees from the mapped `readback` buffer
+/// into `target` and releases the mapping. The error says what failed (without the adapter's name).
+pub(super) fn read_back(
+    device: &wgpu::Device,
+    readback: &wgpu::Buffer,
+    mapped: &MapResult,
+    submission: Option<wgpu::SubmissionIndex>,
+    camera: &PinholeCamera,
+    target: &mut RenderTarget,
+) -> Result<(), String> {
+    let polled = device.poll(wgpu::PollType::Wait {
+        submission_index: submission,
+        timeout: None,
+    });
+    let map_result = mapped.lock().ok().and_then(|mut slot| slot.take());
+    polled.map_err(|e| format!("waiting for the GPU failed: {e}"))?;
+    match map_result {
+        Some(Ok(())) => {}
+        Some(Err(e)) => return Err(format!("reading the image back failed: {e}")),
+        None => return Err("the image read-back never completed".into()),
+    }
+    let (w, h) = (camera.width, camera.height);
+    let row_bytes = padded_row_bytes(w);
+    let slice = readback.slice(..u64::from(row_bytes) * u64::from(h));
+    target.reset(w, h);
+    target.camera = Some(*camera);
+    let unpacked = slice
+        .get_mapped_range()
+        .map(|view| unpack(&view, row_bytes as usize, target))
+        .map_err(|e| format!("mapping the read-back buffer failed: {e}"));
+    readback.unmap();
+    unpacked
+}
 
 /// The unpacked image of one prefetch slot, shared with the helper thread.
 #[derive(Debug, Default)]

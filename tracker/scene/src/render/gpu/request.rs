@@ -6,12 +6,9 @@
 //! never changes what a render returns.
 
 use super::frame::Targets;
-use super::readback::Unpacked;
+use super::readback::{MapResult, Unpacked};
 use crate::geometry::PinholeCamera;
-use std::sync::{Arc, Mutex};
-
-/// Result slot of a readback buffer's map request.
-pub(super) type MapResult = Arc<Mutex<Option<Result<(), wgpu::BufferAsyncError>>>>;
+use std::sync::Arc;
 
 /// Renders kept in flight at most: enough for the objects of a typical scene, each with two renders ahead (the
 /// tracker prefetches for the two whole microseconds its next tick may fall on).

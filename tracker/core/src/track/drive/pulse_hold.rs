@@ -3,20 +3,19 @@
 //!
 //! A tick is stamped with its pulse's rising edge but the timeline only emits it at the falling edge, because the
 //! pulse width carries the depth phase code. Events decoded in between (up to the wide pulse's width, 200 us by
-//! default) are after the tick; handed over at once they would reach the tick's estimate, which the offline
-//! driver ([`tracker::track::track_recording`]) never does, and [`PoseTracker::push_events`] forbids. Both drivers
-//! give the tracker the same input.
+//! default) are after the tick; handed over at once they would reach the tick's estimate, which
+//! [`PoseTracker::push_events`] forbids.
 //!
 //! A pulse can also go missing. The timeline learns so only at the next pulse, and then places a tick between
 //! the two. So events from the time the next pulse was due are held too, until a pulse comes: handed over at
 //! once, they would reach the tick placed in the gap, which saw none of them offline. Normally the pulse comes
-//! within its jitter of that time and the hold merely starts a little early (the worker sets the due time the
-//! timeline's jitter tolerance, 50 us, ahead, so a tick placed in a gap a little before the schedule also sees
+//! within its jitter of that time and the hold merely starts a little early ([`super::TickDriver`] sets the due
+//! time the timeline's jitter tolerance, 50 us, ahead, so a tick placed in a gap a little before the schedule also sees
 //! only earlier events). The hold keeps at most [`MAX_OVERDUE_EVENTS`]; beyond that the held events are handed over and the
 //! overflow is counted.
 
+use crate::track::PoseTracker;
 use drivers::event::{CdEvent, TriggerEdge};
-use tracker::track::PoseTracker;
 
 /// Most events held (64 MiB of events), while a pulse is open or overdue: about 0.1-1 s of a busy event camera.
 /// A trigger that stops, open or closed, would otherwise hold events without end.
@@ -123,9 +122,9 @@ impl PulseHold {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::track::{DepthHandling, PoseEstimate};
     use drivers::recording::DepthFrame;
     use drivers::timeline::Tick;
-    use tracker::track::PoseEstimate;
 
     /// Records the timestamps of the events it is handed.
     #[derive(Default)]
@@ -138,7 +137,7 @@ mod tests {
         fn push_events(&mut self, events: &[CdEvent]) {
             self.0.extend(events.iter().map(|e| e.t_us));
         }
-        fn push_depth(&mut self, _: i64, _: &mut DepthFrame) {}
+        fn push_depth(&mut self, _: i64, _: &mut DepthFrame, _: DepthHandling) {}
         fn tick(&mut self, _: &Tick, _: &mut Vec<PoseEstimate>) {}
         fn pose_at(&self, _: usize, _: i64) -> Option<PoseEstimate> {
             None
