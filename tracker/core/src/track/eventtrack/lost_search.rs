@@ -10,7 +10,7 @@ use crate::recon::EventSurface;
 use crate::track::TrackingState;
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::object::{ObjectTrack, TickInputs};
-use crate::track::redetect::{Cluster, DepthBackground, cluster_centres};
+use crate::track::redetect::{Cluster, DepthBackground, RedetectConfig, cluster_centres};
 use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use scene::geometry::PinholeCamera;
@@ -59,6 +59,28 @@ pub(super) struct SearchFrame<'a> {
     /// The depth frame the places were planned on (the tracker's latest).
     pub depth: &'a DepthFrame,
     pub surface: &'a EventSurface,
+}
+
+impl Search {
+    /// Records the result of checking `place`; once the search is complete, returns the place to move the object
+    /// to if the best one scores at least `min_score` and beats the estimate's place by more than `margin`.
+    fn record(
+        &mut self,
+        place: &PendingPlace,
+        result: PlaceResult,
+        cfg: &RedetectConfig,
+    ) -> Option<Isometry3<f64>> {
+        self.remaining -= 1;
+        if place.estimated {
+            self.here = result.map_or(0.0, |(score, _)| score);
+        } else if let Some((score, pose)) = result
+            && self.best.is_none_or(|(b, _)| score > b)
+        {
+            self.best = Some((score, pose));
+        }
+        let (score, pose) = self.best.filter(|_| self.remaining == 0)?;
+        (score >= cfg.min_score && score > self.here + cfg.margin).then_some(pose)
+    }
 }
 
 impl Redetection {
@@ -306,22 +328,9 @@ impl Redetection {
             check.run_split(&r.checks, &mut r.results, &mut r.probes, renderers);
         for (place, result) in r.checks.iter().zip(&r.results) {
             let k = place.object;
-            let search = &mut r.searches[k];
-            search.remaining -= 1;
-            if place.estimated {
-                search.here = result.map_or(0.0, |(score, _)| score);
-            } else if let Some((score, pose)) = *result
-                && search.best.is_none_or(|(b, _)| score > b)
-            {
-                search.best = Some((score, pose));
-            }
-            if search.remaining == 0
-                && let Some((score, pose)) = search.best
-                && score >= cfg.min_score
-                && score > search.here + cfg.margin
-            {
+            if let Some(found) = r.searches[k].record(place, *result, &cfg) {
                 let o = &mut objects[k];
-                o.relocate_on(frame.depth, &frame.rig.depth, pose, frame_t_us, config);
+                o.relocate_on(frame.depth, &frame.rig.depth, found, frame_t_us, config);
                 scene[k].pose = o.state.predicted;
             }
         }

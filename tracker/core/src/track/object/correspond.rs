@@ -142,53 +142,9 @@ pub(super) fn correspond(
     prebinned: Option<BinnedWindow>,
 ) -> Option<Start> {
     let roi_camera = inputs.camera.crop(roi);
-    let predicted = state.predicted;
-    scratch.view.extract(
-        &scratch.target,
-        &roi_camera,
-        model.label,
-        &predicted,
-        config.max_surface_points,
-        config.max_contour_points,
-    );
-    // A late frame: checked at its exposure, and the refinement starts from the prediction corrected there.
-    let late = depth.fresh && state.late_frame.is_some();
-    let (predicted, late_fit) = if late {
-        let use_events = config.events && !scratch.view.contour.is_empty();
-        carry_late_depth(
-            model,
-            state,
-            scratch,
-            inputs,
-            &roi_camera,
-            use_events,
-            config,
-        )
-    } else {
-        (predicted, None)
-    };
-    // Outline the depth shows behind a nearer surface (a hand gripping the object) fires no events: leave it
-    // out of the event and intensity terms rather than pull it onto the occluder's edges.
-    if config.hide_occluded_outline && depth.weight > 0.0 {
-        scratch.view.hide_occluded_contour(
-            &scratch.depth_now,
-            &roi_camera,
-            &predicted,
-            config.depth_term.occlusion_gap,
-            config.hide_occluded_max_share,
-        );
-    }
-    // Until its first depth frame, for as long as a late one could still come, an object holds its first
-    // pose: events alone, with no depth to anchor them, drift (a live depth camera's first frame arrives tens
-    // of milliseconds after the first tick).
-    let awaiting_depth = state.depth_frames_used == 0
-        && (inputs.t_us - state.first_us) as f64 <= config.max_depth_age_ms * 1e3;
-    let refine_now = match config.depth {
-        DepthUse::DepthFramesOnly => depth.fresh,
-        DepthUse::Off => true,
-        DepthUse::EveryTick | DepthUse::FirstFrameOnly => depth.fresh || !awaiting_depth,
-    };
-    if !refine_now {
+    let (predicted, late, late_fit) =
+        view_at_prediction(model, state, scratch, inputs, config, depth, &roi_camera);
+    if !refines_now(state, inputs, config, depth.fresh) {
         return None;
     }
     let event_term = config.event_term;
@@ -203,19 +159,16 @@ pub(super) fn correspond(
     } else {
         (0.0, None)
     };
-    let mut pose = match contrast_velocity {
-        // The motion contrast maximisation found, from the previous estimate.
-        Some(xi) => {
-            let span = (inputs.t_us - state.t_us).max(0) as f64 * 1e-6;
-            apply_step(&state.pose, &model.center_obj, &(xi * span))
-        }
-        None => predicted,
-    };
-    if use_event_residuals
-        && let Some(shifted) = outline_shift(model, state, scratch, inputs, config, &predicted)
-    {
-        pose = shifted;
-    }
+    let pose = start_pose(
+        model,
+        state,
+        scratch,
+        inputs,
+        config,
+        &predicted,
+        contrast_velocity,
+        use_event_residuals,
+    );
     if depth.weight > 0.0 && !depth.fresh && !(depth.at_predicted && pose == predicted) {
         state
             .carried
@@ -231,6 +184,99 @@ pub(super) fn correspond(
         use_intensity,
         window_s,
     })
+}
+
+/// The model view of the ROI render at the prediction, a late frame carried (its check at the exposure corrects
+/// the prediction), and the outline the depth shows occluded hidden. Returns the prediction to start from, whether
+/// the tick's depth frame is late, and its depth counts at the exposure.
+fn view_at_prediction(
+    model: &ObjectModel,
+    state: &mut ObjectState,
+    scratch: &mut TickScratch,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+    depth: TickDepth,
+    roi_camera: &PinholeCamera,
+) -> (Isometry3<f64>, bool, Option<crate::refine::DepthTermStats>) {
+    let predicted = state.predicted;
+    scratch.view.extract(
+        &scratch.target,
+        roi_camera,
+        model.label,
+        &predicted,
+        config.max_surface_points,
+        config.max_contour_points,
+    );
+    // A late frame: checked at its exposure, and the refinement starts from the prediction corrected there.
+    let late = depth.fresh && state.late_frame.is_some();
+    let (predicted, late_fit) = if late {
+        let use_events = config.events && !scratch.view.contour.is_empty();
+        carry_late_depth(
+            model, state, scratch, inputs, roi_camera, use_events, config,
+        )
+    } else {
+        (predicted, None)
+    };
+    // Outline the depth shows behind a nearer surface (a hand gripping the object) fires no events: leave it
+    // out of the event and intensity terms rather than pull it onto the occluder's edges.
+    if config.hide_occluded_outline && depth.weight > 0.0 {
+        scratch.view.hide_occluded_contour(
+            &scratch.depth_now,
+            roi_camera,
+            &predicted,
+            config.depth_term.occlusion_gap,
+            config.hide_occluded_max_share,
+        );
+    }
+    (predicted, late, late_fit)
+}
+
+/// Whether the object refines at this tick (`fresh`: a depth frame was registered): `depth30` only at depth
+/// frames; until its first depth frame, for as long as a late one could still come, an object holds its first
+/// pose: events alone, with no depth to anchor them, drift (a live depth camera's first frame arrives tens of
+/// milliseconds after the first tick).
+fn refines_now(
+    state: &ObjectState,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+    fresh: bool,
+) -> bool {
+    let awaiting_depth = state.depth_frames_used == 0
+        && (inputs.t_us - state.first_us) as f64 <= config.max_depth_age_ms * 1e3;
+    match config.depth {
+        DepthUse::DepthFramesOnly => fresh,
+        DepthUse::Off => true,
+        DepthUse::EveryTick | DepthUse::FirstFrameOnly => fresh || !awaiting_depth,
+    }
+}
+
+/// Where the optimisation starts: the previous estimate moved by the velocity contrast maximisation found, else
+/// `predicted`, shifted by the outline's image shift the events show when the event residuals take part.
+#[allow(clippy::too_many_arguments)]
+fn start_pose(
+    model: &ObjectModel,
+    state: &ObjectState,
+    scratch: &mut TickScratch,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+    predicted: &Isometry3<f64>,
+    contrast_velocity: Option<Vector6<f64>>,
+    use_event_residuals: bool,
+) -> Isometry3<f64> {
+    let pose = match contrast_velocity {
+        // The motion contrast maximisation found, from the previous estimate.
+        Some(xi) => {
+            let span = (inputs.t_us - state.t_us).max(0) as f64 * 1e-6;
+            apply_step(&state.pose, &model.center_obj, &(xi * span))
+        }
+        None => *predicted,
+    };
+    if use_event_residuals
+        && let Some(shifted) = outline_shift(model, state, scratch, inputs, config, predicted)
+    {
+        return shifted;
+    }
+    pose
 }
 
 /// How far the outline search looks, full-image pixels: the whole range until two depth frames have measured the
