@@ -18,7 +18,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 use tracker::track::DepthHandling;
-use tracker::track::{PoseTracker, TrackerConfig};
+use tracker::track::{ExecutionConfig, PoseTracker, TrackerConfig};
 
 /// Adds the wall time from its creation to its drop to `spent_ns`: held by [`HookedRenderer`] around one render.
 struct RenderTimer {
@@ -62,7 +62,7 @@ const TICK_PERIOD: Duration = Duration::from_nanos(8_333_333);
 /// The same ticks as [`bench_tracker`] at the pace of a live 120 Hz stream: each tick starts one tick period after
 /// the previous one started, and only the tick call is timed, as the runtime's latency counts it (the runtime
 /// publishes the poses, then calls `prepare_next_tick`, which is not timed here). Between ticks the tracker idles,
-/// so a renderer that prefetches ([`tracker::track::TrackerConfig::prefetch_renders`]) has rendered the next ROI
+/// so a renderer that prefetches ([`tracker::track::ExecutionConfig::prefetch_renders`]) has rendered the next ROI
 /// by then; caches also cool down between ticks, as in the runtime. The back-to-back benches time `tick` and
 /// `prepare_next_tick` together: all of a tick's work, none of it hidden.
 ///
@@ -212,7 +212,10 @@ fn ticks(c: &mut Criterion) {
     let rec = mug_recording(&dir, 0.5);
     // `cpu`: the CPU renderer on the tracker's thread alone (one core, `prefetch_renders = false`).
     let one_thread = TrackerConfig {
-        prefetch_renders: false,
+        execution: ExecutionConfig {
+            prefetch_renders: false,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     let cpu: Box<dyn Renderer + Send> = Box::new(CpuRenderer::new());
@@ -243,10 +246,8 @@ fn ticks(c: &mut Criterion) {
     bench_paced(c, "cpu_ahead", &mut s, Some(&spent));
     // `cpu_simplified`: as `cpu`, rendering the mug's mesh simplified (1,896 triangles: rendered as loaded by default,
     // `render_mesh_simplify_above`).
-    let simplified = TrackerConfig {
-        render_mesh_simplify_above: 0,
-        ..one_thread
-    };
+    let mut simplified = one_thread;
+    simplified.execution.render_mesh_simplify_above = 0;
     let mut s = steady_tracker(rec.clone(), simplified, Box::new(CpuRenderer::new()));
     bench_tracker(c, "cpu_simplified", &mut s);
     match create_renderer(RendererKind::Gpu) {
@@ -271,7 +272,10 @@ fn ticks(c: &mut Criterion) {
             }
             // `gpu_simplified`: the mug's mesh simplified (`render_mesh_simplify_above`).
             let simplified = TrackerConfig {
-                render_mesh_simplify_above: 0,
+                execution: ExecutionConfig {
+                    render_mesh_simplify_above: 0,
+                    ..Default::default()
+                },
                 ..TrackerConfig::default()
             };
             match (

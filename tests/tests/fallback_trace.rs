@@ -20,8 +20,8 @@ use tracker::recording::{PoseTrack, recording_ticks};
 use tracker::recording::{recording_object, recording_rig};
 use tracker::track::DepthHandling;
 use tracker::track::{
-    DepthFallbackCheck, EventTrack6d, FallbackRule, OfflineTiming, PoseEstimate, PoseTracker,
-    TrackerConfig, TrackerCounters, track_recording, track_recording_timed,
+    DepthFallbackCheck, EventTrack6d, FallbackRule, LateDepthConfig, OfflineTiming, PoseEstimate,
+    PoseTracker, TrackerConfig, TrackerCounters, track_recording, track_recording_timed,
 };
 
 /// A marker held in a hand, translating at moderate speed for 1 s (seed 1031, the dev suite's marker
@@ -66,7 +66,7 @@ fn tracker_from_truth_with(
 fn the_fallback_record_matches_what_the_tracker_published() {
     let (_dir, recording) = moving_marker();
     let (truth, first, mut tracker) = tracker_from_truth(&recording, "marker");
-    let rule = TrackerConfig::default().fallback_rule();
+    let rule = TrackerConfig::default().safety_net.fallback_rule();
     let motion_margin = rule.motion_margin;
 
     let mut checks = Vec::new();
@@ -285,7 +285,7 @@ fn late_checks(
     first: i64,
     latency_us: i64,
 ) -> Vec<DepthFallbackCheck> {
-    let rule = TrackerConfig::default().fallback_rule();
+    let rule = TrackerConfig::default().safety_net.fallback_rule();
     let timing = OfflineTiming {
         start_us: first,
         depth_latency_us: latency_us,
@@ -333,7 +333,10 @@ fn late_frames_are_checked_at_their_exposure() {
     let dir = tempfile::tempdir().unwrap();
     let recording = mug_recording(&dir.path().join("mug"), 1.0);
     let carrying = TrackerConfig {
-        retrack_late_depth: false,
+        late_depth: LateDepthConfig {
+            retrack_late_depth: false,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     let (truth, first, inner) = tracker_from_truth_with(&recording, "mug", carrying);

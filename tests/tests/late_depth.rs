@@ -17,8 +17,8 @@ use tracker::recording::{PoseTrack, recording_ticks};
 use tracker::recording::{recording_object, recording_rig};
 use tracker::track::DepthHandling;
 use tracker::track::{
-    EventTrack6d, OfflineStats, OfflineTiming, PoseEstimate, PoseTracker, TrackerConfig,
-    TrackerCounters, track_recording_timed,
+    EventTrack6d, LateDepthConfig, OfflineStats, OfflineTiming, PoseEstimate, PoseTracker,
+    TrackerConfig, TrackerCounters, track_recording_timed,
 };
 
 /// The moderate mug shake every test here tracks (1 s, generated once per test binary run into a temp dir).
@@ -90,7 +90,10 @@ fn late_frames_keep_the_object_tracked_where_dropping_them_loses_it() {
     let (on_time, _, _) = track(&rec, TrackerConfig::default(), 0);
     let (late, late_tracker, stats) = track(&rec, TrackerConfig::default(), latency_us);
     let dropping = TrackerConfig {
-        max_depth_age_ms: 0.0,
+        late_depth: LateDepthConfig {
+            max_depth_age_ms: 0.0,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     let (dropped, drop_tracker, _) = track(&rec, dropping, latency_us);
@@ -137,7 +140,10 @@ fn tracking_again_from_the_exposure_reaches_the_on_time_estimate_at_each_arrival
     let (on_time, _, _) = track(&rec, TrackerConfig::default(), 0);
     let (late, tracker, stats) = track(&rec, TrackerConfig::default(), 20_000);
     let carrying = TrackerConfig {
-        retrack_late_depth: false,
+        late_depth: LateDepthConfig {
+            retrack_late_depth: false,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     let (carried, carrying_tracker, _) = track(&rec, carrying, 20_000);
@@ -228,7 +234,10 @@ fn a_late_frame_is_tracked_again_when_it_arrives_not_at_the_next_tick() {
     let rec = mug_recording(&dir.path().join("mug"), 0.5);
     for retrack_late_depth in [true, false] {
         let config = TrackerConfig {
-            retrack_late_depth,
+            late_depth: LateDepthConfig {
+                retrack_late_depth,
+                ..Default::default()
+            },
             ..TrackerConfig::default()
         };
         let (inner, first_us) = mug_tracker(&rec, config);
@@ -375,7 +384,10 @@ fn a_frame_carried_only_gives_the_carrying_poses() {
     let dir = tempfile::tempdir().unwrap();
     let rec = mug_recording(&dir.path().join("mug"), 0.5);
     let carrying = TrackerConfig {
-        retrack_late_depth: false,
+        late_depth: LateDepthConfig {
+            retrack_late_depth: false,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     let (carried, _, stats) = track(&rec, carrying, 20_000);

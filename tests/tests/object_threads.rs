@@ -14,7 +14,7 @@ use std::collections::HashSet;
 use std::sync::{Arc, Mutex};
 use tracker::recording::{PoseTrack, recording_ticks};
 use tracker::recording::{recording_object, recording_rig};
-use tracker::track::{EventTrack6d, PoseEstimate, TrackerConfig, track_recording};
+use tracker::track::{EventTrack6d, ExecutionConfig, PoseEstimate, TrackerConfig, track_recording};
 
 /// Every estimate of every tick, and the most threads that rendered within one tick.
 fn run(recording: &Recording, threads: usize) -> (Vec<PoseEstimate>, usize) {
@@ -35,8 +35,11 @@ fn run(recording: &Recording, threads: usize) -> (Vec<PoseEstimate>, usize) {
     // Renders made ahead would run on the `render-ahead` threads (tests/tests/tracker_render_ahead.rs): here every
     // render is made by the thread that steps the object.
     let mut config = TrackerConfig {
-        object_threads: threads,
-        prefetch_renders: false,
+        execution: ExecutionConfig {
+            object_threads: threads,
+            prefetch_renders: false,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     config.redetect.enabled = false;

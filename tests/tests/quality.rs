@@ -13,7 +13,7 @@ use hil_sim::objects::ObjectKind;
 use scene::render::CpuRenderer;
 use tracker::recording::{PoseTrack, recording_ticks};
 use tracker::recording::{recording_object, recording_rig};
-use tracker::track::{EventTrack6d, TrackerConfig, track_recording};
+use tracker::track::{EventTrack6d, ModalityConfig, TrackerConfig, track_recording};
 
 #[test]
 fn without_events_quality_changes_only_at_depth_frames() {
@@ -35,7 +35,10 @@ fn without_events_quality_changes_only_at_depth_frames() {
     let object = recording_object(&recording, "cracker_box", first, pose).expect("model");
     let rig = recording_rig(&recording).expect("rig");
     let config = TrackerConfig {
-        events: false,
+        modalities: ModalityConfig {
+            events: false,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     let mut tracker = EventTrack6d::new(config, rig, vec![object], Box::new(CpuRenderer::new()))

@@ -195,9 +195,9 @@ fn checking_places_on_several_threads_changes_nothing() {
     // All places of a search at once: three threads take a share each.
     let mut config = TrackerConfig::default();
     config.redetect.places_per_tick = 0;
-    config.object_threads = 1;
+    config.execution.object_threads = 1;
     let one = run(&recording, config.clone());
-    config.object_threads = 3;
+    config.execution.object_threads = 3;
     let three = run(&recording, config);
     assert!(one.redetections >= 1, "no re-detection to compare");
     assert_eq!(one.redetections, three.redetections);

@@ -9,7 +9,7 @@ use scene::mesh::Simplification;
 use scene::render::CpuRenderer;
 use tracker::recording::{PoseTrack, recording_ticks};
 use tracker::recording::{recording_object, recording_rig};
-use tracker::track::{EventTrack6d, TrackerConfig, track_recording};
+use tracker::track::{EventTrack6d, ExecutionConfig, TrackerConfig, track_recording};
 
 /// Tracks the fixture's 0.5 s mug shake with `config`: how the mesh was simplified, the mug's diameter, and the
 /// mean and largest distance between the estimated and true positions, metres.
@@ -59,10 +59,14 @@ fn a_dense_mesh_is_rendered_simplified_and_still_tracked() {
 
     // Counted as dense: simplified within a quarter of an ROI pixel (1.2 diameters over 160 pixels).
     let config = TrackerConfig {
-        render_mesh_simplify_above: 1000,
+        execution: ExecutionConfig {
+            render_mesh_simplify_above: 1000,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
-    let tolerance_m = config.render_mesh_tolerance_px * config.roi_scale * diameter / 160.0;
+    let tolerance_m =
+        config.execution.render_mesh_tolerance_px * config.roi.roi_scale * diameter / 160.0;
     let (simple, _, mean, worst) = track_mug(config);
     assert_eq!(simple.triangles_before, 1896);
     assert!(
@@ -84,8 +88,11 @@ fn a_dense_mesh_is_rendered_simplified_and_still_tracked() {
 
     // A zero tolerance renders any mesh as loaded.
     let (zero, _, _, _) = track_mug(TrackerConfig {
-        render_mesh_simplify_above: 0,
-        render_mesh_tolerance_px: 0.0,
+        execution: ExecutionConfig {
+            render_mesh_simplify_above: 0,
+            render_mesh_tolerance_px: 0.0,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     });
     assert_eq!(zero.triangles_after, zero.triangles_before);

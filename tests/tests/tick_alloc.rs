@@ -11,7 +11,9 @@ use scene::render::CpuRenderer;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use tracker::track::DepthHandling;
-use tracker::track::{PoseTracker, TrackerConfig, TrackerCounters, TrackingMethod};
+use tracker::track::{
+    ExecutionConfig, LateDepthConfig, PoseTracker, TrackerConfig, TrackerCounters, TrackingMethod,
+};
 
 struct Counting;
 
@@ -175,7 +177,10 @@ fn steady_state_ticks_do_not_allocate() {
     }
     // Two objects stepped on two threads (the object thread is started once and woken every tick).
     let config = TrackerConfig {
-        object_threads: 2,
+        execution: ExecutionConfig {
+            object_threads: 2,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     let (n, _) = allocations_of_steady_ticks(&rec, config, 2, 0);
@@ -186,7 +191,10 @@ fn steady_state_ticks_do_not_allocate() {
     // Depth frames 20 ms late, carried from their exposure (not tracked again): registered at the pose history's
     // estimate, aligned there and carried.
     let carrying = TrackerConfig {
-        retrack_late_depth: false,
+        late_depth: LateDepthConfig {
+            retrack_late_depth: false,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     let (n, counters) = allocations_of_steady_ticks(&rec, carrying, 1, 20_000);

@@ -7,7 +7,7 @@
 
 use eventtrack6d_tests::tick_fixture::{EstimateBits, mug_recording, replay_bits};
 use scene::render::{RendererKind, create_renderer};
-use tracker::track::{TrackerConfig, TrackerCounters};
+use tracker::track::{ExecutionConfig, TrackerConfig, TrackerCounters};
 
 fn replay(prefetch: bool) -> (Vec<EstimateBits>, TrackerCounters) {
     let dir = std::env::temp_dir().join("eventtrack6d-tracker-gpu-test");
@@ -16,7 +16,10 @@ fn replay(prefetch: bool) -> (Vec<EstimateBits>, TrackerCounters) {
         panic!("no GPU renderer ({e}): install mesa-vulkan-drivers (lavapipe), as .ci/setup does")
     });
     let config = TrackerConfig {
-        prefetch_renders: prefetch,
+        execution: ExecutionConfig {
+            prefetch_renders: prefetch,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     replay_bits(&recording, config, renderer)

@@ -11,7 +11,9 @@ use eventtrack6d_tests::tick_fixture::{
     EstimateBits, mug_and_can_recording, mug_recording, replay_bits,
 };
 use scene::render::{CpuRenderer, RendererKind};
-use tracker::track::{TrackerConfig, TrackerCounters, TrackingMethod, track_recording};
+use tracker::track::{
+    ExecutionConfig, TrackerConfig, TrackerCounters, TrackingMethod, track_recording,
+};
 
 fn replay(config: TrackerConfig) -> (Vec<EstimateBits>, TrackerCounters) {
     let dir = std::env::temp_dir().join("eventtrack6d-tracker-ahead-test");
@@ -23,7 +25,10 @@ fn replay(config: TrackerConfig) -> (Vec<EstimateBits>, TrackerCounters) {
 fn renders_ahead_change_no_estimate_and_most_ticks_take_them() {
     let (with, counters) = replay(TrackerConfig::default());
     let (without, plain) = replay(TrackerConfig {
-        prefetch_renders: false,
+        execution: ExecutionConfig {
+            prefetch_renders: false,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     });
     assert_eq!(plain.renders_prefetched, 0);
@@ -61,8 +66,11 @@ fn replay_two_objects(prefetch: bool) -> (Vec<(i64, usize, [u64; 7])>, TrackerCo
     let rec = mug_and_can_recording(&dir);
     let scene = recording_scene(&rec, &[]).expect("scene");
     let config = TrackerConfig {
-        prefetch_renders: prefetch,
-        object_threads: 2,
+        execution: ExecutionConfig {
+            prefetch_renders: prefetch,
+            object_threads: 2,
+            ..Default::default()
+        },
         ..TrackerConfig::default()
     };
     let timeline = rec.meta.trigger.timeline_config();

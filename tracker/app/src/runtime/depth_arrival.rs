@@ -1,5 +1,5 @@
 //! When the tracker works on a late depth frame. A late frame makes the tracker track the ticks since its
-//! exposure again when it arrives ([`tracker::track::TrackerConfig::retrack_late_depth`]); a frame that arrives
+//! exposure again when it arrives ([`tracker::track::LateDepthConfig::retrack_late_depth`]); a frame that arrives
 //! just before a tick would make that tick wait for the work. In a real-time run such a frame is handed over
 //! deferred ([`tracker::track::DepthHandling::AfterNextTick`]): the tick uses it the cheap way (carried from
 //! its exposure) and the tracker tracks again once the tick's poses are out.

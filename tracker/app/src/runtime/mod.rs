@@ -132,8 +132,14 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
         defer_depth: config.tracker.defer_late_depth
             && (config.source.kind == SourceKind::Live || config.source.pace == Pace::Realtime),
         // A frame within half a tick of its own tick is used whatever its age.
-        depth_age_limit_ms: (config.tracker.method != "static")
-            .then(|| config.tracker.parameters.max_depth_age_ms.max(4.2)),
+        depth_age_limit_ms: (config.tracker.method != "static").then(|| {
+            config
+                .tracker
+                .parameters
+                .late_depth
+                .max_depth_age_ms
+                .max(4.2)
+        }),
     };
     let result = rt.block_on(run_parts(parts, hooks));
     rt.shutdown_timeout(Duration::from_secs(2));

@@ -18,7 +18,11 @@ mod redetect;
 mod validate;
 
 pub use clock::TickClock;
-pub use config::{DepthUse, MAX_DEPTH_AGE_LIMIT_MS, QualityConfig, TrackerConfig, TrackingMethod};
+pub use config::{
+    CorrespondConfig, DepthUse, ExecutionConfig, LateDepthConfig, MAX_DEPTH_AGE_LIMIT_MS,
+    ModalityConfig, MotionConfig, OptimiserConfig, QualityConfig, RoiConfig, SafetyNetConfig,
+    TrackerConfig, TrackerParameterKeys, TrackingMethod,
+};
 pub use depth_transport::DepthTransport;
 pub use drive::{
     MAX_OVERDUE_EVENTS, OfflineStats, OfflineTiming, PulseHold, TickDriver, track_recording,
@@ -63,7 +67,7 @@ pub trait PoseTracker: Send {
     /// The depth frame exposed at time `t_us` (the depth-exposure tick), in the depth camera's pixels, handled as
     /// `handling` says. It may arrive after that tick (a live depth camera's latency: EventTrack6D then tracks the
     /// ticks since the exposure again with it, or uses it at the next tick, up to
-    /// [`TrackerConfig::max_depth_age_ms`] after the exposure). A tracker that keeps the frame takes it without a
+    /// [`crate::track::LateDepthConfig::max_depth_age_ms`] after the exposure). A tracker that keeps the frame takes it without a
     /// copy and leaves its previous frame in `frame` (for the caller to reuse or drop); one that does not leaves
     /// `frame` as it is.
     fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame, handling: DepthHandling);
@@ -77,7 +81,7 @@ pub trait PoseTracker: Send {
         None
     }
     /// Work for the next tick that need not delay this tick's poses (EventTrack6D: start its renders,
-    /// [`TrackerConfig::prefetch_renders`]); call it once the tick's poses are published. Skipping it changes no
+    /// [`crate::track::ExecutionConfig::prefetch_renders`]); call it once the tick's poses are published. Skipping it changes no
     /// pose, only when the work is done.
     fn prepare_next_tick(&mut self) {}
     /// The pose of object `object` at any time `t_us` (interpolated between ticks, extrapolated at most one tick

@@ -106,42 +106,42 @@ fn view_checks(config: &TrackerConfig) -> [Check; 8] {
     [
         Check::new(
             "roi_size",
-            f64::from(config.roi_size),
+            f64::from(config.roi.roi_size),
             Rule::Within(16.0, 1024.0, "must be 16 to 1024 pixels"),
         ),
         Check::new(
             "roi_scale",
-            config.roi_scale,
+            config.roi.roi_scale,
             Rule::Within(0.5, 4.0, "must be 0.5 to 4 diameters"),
         ),
         Check::new(
             "object_threads",
-            config.object_threads as f64,
+            config.execution.object_threads as f64,
             Rule::AtMost(256.0, "must be 0 (one per core) to 256"),
         ),
         Check::new(
             "render_mesh_simplify_above",
-            config.render_mesh_simplify_above as f64,
+            config.execution.render_mesh_simplify_above as f64,
             Rule::AtMost(100_000_000.0, "must be at most 100000000 triangles"),
         ),
         Check::new(
             "render_mesh_tolerance_px",
-            config.render_mesh_tolerance_px,
+            config.execution.render_mesh_tolerance_px,
             Rule::Within(0.0, 2.0, "must be 0 (the mesh as loaded) to 2 ROI pixels"),
         ),
         Check::new(
             "max_surface_points",
-            config.max_surface_points as f64,
+            config.correspond.max_surface_points as f64,
             Rule::Positive("must be at least 1"),
         ),
         Check::new(
             "max_contour_points",
-            config.max_contour_points as f64,
+            config.correspond.max_contour_points as f64,
             Rule::Positive("must be at least 1"),
         ),
         Check::new(
             "max_event_points",
-            config.max_event_points as f64,
+            config.correspond.max_event_points as f64,
             Rule::Positive("must be at least 1"),
         ),
     ]
@@ -152,28 +152,28 @@ fn optimiser_checks(config: &TrackerConfig) -> [Check; 6] {
     [
         Check::new(
             "iterations",
-            f64::from(config.iterations),
+            f64::from(config.optimiser.iterations),
             Rule::AtMost(100.0, "must be at most 100"),
         ),
-        Check::new("damping", config.damping, Rule::NonNegative),
+        Check::new("damping", config.optimiser.damping, Rule::NonNegative),
         Check::new(
             "max_step_rotation_deg",
-            config.max_step_rotation_deg,
+            config.optimiser.max_step_rotation_deg,
             Rule::Positive(POSITIVE),
         ),
         Check::new(
             "max_step_translation_diameters",
-            config.max_step_translation_diameters,
+            config.optimiser.max_step_translation_diameters,
             Rule::Positive(POSITIVE),
         ),
         Check::new(
             "prior_translation_m",
-            config.prior_translation_m,
+            config.optimiser.prior_translation_m,
             Rule::Positive(POSITIVE),
         ),
         Check::new(
             "prior_rotation_deg",
-            config.prior_rotation_deg,
+            config.optimiser.prior_rotation_deg,
             Rule::Positive(POSITIVE),
         ),
     ]
@@ -184,19 +184,27 @@ fn motion_checks(config: &TrackerConfig) -> [Check; 5] {
     [
         Check::new(
             "prediction_gain",
-            config.prediction_gain,
+            config.motion.prediction_gain,
             Rule::Within(0.0, 2.0, "must be 0 to 2"),
         ),
-        Check::new("velocity_smoothing", config.velocity_smoothing, Rule::Unit),
         Check::new(
-            "velocity_smoothing_depth",
-            config.velocity_smoothing_depth,
+            "velocity_smoothing",
+            config.motion.velocity_smoothing,
             Rule::Unit,
         ),
-        Check::new("max_speed", config.max_speed, Rule::Positive(POSITIVE)),
+        Check::new(
+            "velocity_smoothing_depth",
+            config.motion.velocity_smoothing_depth,
+            Rule::Unit,
+        ),
+        Check::new(
+            "max_speed",
+            config.motion.max_speed,
+            Rule::Positive(POSITIVE),
+        ),
         Check::new(
             "max_angular_speed",
-            config.max_angular_speed,
+            config.motion.max_angular_speed,
             Rule::Positive(POSITIVE),
         ),
     ]
@@ -207,42 +215,42 @@ fn depth_use_checks(config: &TrackerConfig) -> [Check; 8] {
     [
         Check::new(
             "carried_depth_weight",
-            config.carried_depth_weight,
+            config.modalities.carried_depth_weight,
             Rule::NonNegative,
         ),
         Check::new(
             "hide_occluded_max_share",
-            config.hide_occluded_max_share,
+            config.correspond.hide_occluded_max_share,
             Rule::Within(0.0, 1.0, "must be 0 to 1"),
         ),
         Check::new(
             "max_depth_age_ms",
-            config.max_depth_age_ms,
+            config.late_depth.max_depth_age_ms,
             Rule::Within(0.0, MAX_DEPTH_AGE_LIMIT_MS, "must be 0 to 500 ms"),
         ),
         Check::new(
             "retrack_max_events",
-            config.retrack_max_events as f64,
+            config.late_depth.retrack_max_events as f64,
             Rule::AtMost(100_000_000.0, "must be at most 100000000 (2.4 GB)"),
         ),
         Check::new(
             "depth_fallback_margin",
-            config.depth_fallback_margin,
+            config.safety_net.depth_fallback_margin,
             Rule::Finite,
         ),
         Check::new(
             "depth_fallback_motion_margin",
-            config.depth_fallback_motion_margin,
+            config.safety_net.depth_fallback_motion_margin,
             Rule::Finite,
         ),
         Check::new(
             "depth_fallback_estimate_motion_margin",
-            config.depth_fallback_estimate_motion_margin,
+            config.safety_net.depth_fallback_estimate_motion_margin,
             Rule::Finite,
         ),
         Check::new(
             "depth_fallback_event_weight",
-            config.depth_fallback_event_weight,
+            config.safety_net.depth_fallback_event_weight,
             Rule::AtLeast(0.0, "must be 0 or more"),
         ),
     ]
@@ -251,22 +259,26 @@ fn depth_use_checks(config: &TrackerConfig) -> [Check; 8] {
 /// The checks of the use of events and intensity, in the order they are reported.
 fn event_use_checks(config: &TrackerConfig) -> [Check; 6] {
     [
-        Check::new("event_weight", config.event_weight, Rule::NonNegative),
+        Check::new(
+            "event_weight",
+            config.modalities.event_weight,
+            Rule::NonNegative,
+        ),
         Check::new(
             "event_window_px",
-            config.event_window_px,
+            config.correspond.event_window_px,
             Rule::Positive(POSITIVE),
         ),
         Check::new(
             "min_event_window_us",
-            config.min_event_window_us as f64,
+            config.correspond.min_event_window_us as f64,
             Rule::NonNegative,
         ),
         Check::new(
             "max_event_window_us",
-            config.max_event_window_us as f64,
+            config.correspond.max_event_window_us as f64,
             Rule::AtLeast(
-                config.min_event_window_us as f64,
+                config.correspond.min_event_window_us as f64,
                 "must be >= min_event_window_us",
             ),
         ),

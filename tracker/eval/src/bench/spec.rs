@@ -170,13 +170,16 @@ mod tests {
     #[test]
     fn tracker_methods_are_built_on_the_given_parameters() {
         let mut base = tracker::track::TrackerConfig {
-            iterations: 3,
+            optimiser: tracker::track::OptimiserConfig {
+                iterations: 3,
+                ..Default::default()
+            },
             ..Default::default()
         };
         base.redetect.places_per_tick = 5;
         for spec in ["eventtrack6d", "depth30", "events-only@5:5"] {
             let m = tracker_method_from_spec(spec, &base).unwrap().unwrap();
-            assert_eq!(m.config().iterations, 3, "{spec}");
+            assert_eq!(m.config().optimiser.iterations, 3, "{spec}");
             assert_eq!(m.config().redetect.places_per_tick, 5, "{spec}");
             // The report records exactly the parameters it tracks with.
             let recorded = m.parameters().unwrap();

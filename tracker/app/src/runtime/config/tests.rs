@@ -50,12 +50,12 @@ fn tracker_parameters_are_read_and_checked() {
          [tracker.parameters.redetect]\nplaces_per_tick = 3\n",
     )
     .unwrap();
-    assert_eq!(c.tracker.parameters.object_threads, 2);
+    assert_eq!(c.tracker.parameters.execution.object_threads, 2);
     assert_eq!(c.tracker.parameters.redetect.places_per_tick, 3);
     // Keys not given keep their defaults.
     assert_eq!(
-        c.tracker.parameters.roi_size,
-        tracker::track::TrackerConfig::default().roi_size
+        c.tracker.parameters.roi.roi_size,
+        tracker::track::TrackerConfig::default().roi.roi_size
     );
     let e = parse("[source]\nkind = \"demo\"\n[tracker.parameters]\nroi_sise = 128\n")
         .unwrap_err()

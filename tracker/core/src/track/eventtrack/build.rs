@@ -42,9 +42,10 @@ pub(super) fn build_objects(
         } else {
             o.mesh.diameter()
         };
-        let roi_pixel_m = config.roi_scale * diameter / f64::from(config.roi_size);
-        let tolerance_m = if o.mesh.triangles().len() > config.render_mesh_simplify_above {
-            config.render_mesh_tolerance_px * roi_pixel_m
+        let roi_pixel_m = config.roi.roi_scale * diameter / f64::from(config.roi.roi_size);
+        let tolerance_m = if o.mesh.triangles().len() > config.execution.render_mesh_simplify_above
+        {
+            config.execution.render_mesh_tolerance_px * roi_pixel_m
         } else {
             0.0
         };

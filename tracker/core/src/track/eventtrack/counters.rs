@@ -14,7 +14,7 @@ pub struct TrackerCounters {
     /// `max_depth_age_ms`).
     pub depth_frames_late: u64,
     /// Of the late depth frames used, those the tracker tracked again from their exposure with
-    /// ([`super::super::TrackerConfig::retrack_late_depth`]).
+    /// ([`super::super::LateDepthConfig::retrack_late_depth`]).
     pub late_frames_retracked: u64,
     /// Ticks tracked again for them (their poses were out already).
     pub ticks_retracked: u64,
@@ -35,7 +35,7 @@ pub struct TrackerCounters {
     pub redetect_places_checked: u64,
     /// Re-detection places left unchecked because a newer depth frame replaced the one they were planned on.
     pub redetect_places_dropped: u64,
-    /// Renders started at the end of a tick for the next one ([`TrackerConfig::prefetch_renders`]).
+    /// Renders started at the end of a tick for the next one ([`crate::track::ExecutionConfig::prefetch_renders`]).
     pub renders_prefetched: u64,
     /// Of them, renders the next tick took (the others were rendered again: its request differed).
     pub prefetched_renders_used: u64,

@@ -57,8 +57,8 @@ impl TickEngine {
         if objects.len() > 65534 {
             return Err(TrackError::TooManyObjects(objects.len()));
         }
-        if config.prefetch_renders
-            && config.depth != DepthUse::DepthFramesOnly
+        if config.execution.prefetch_renders
+            && config.modalities.depth != DepthUse::DepthFramesOnly
             && !renderer.renders_ahead()
         {
             renderer = Box::new(RenderAhead::new(renderer));
@@ -114,7 +114,7 @@ impl TickEngine {
     fn render_first_rois(&mut self, names: &[String]) -> Result<(), TrackError> {
         let scene = Scene::objects(&self.scene)
             .geometry_only()
-            .normals_on_surface_grid(self.config.max_surface_points);
+            .normals_on_surface_grid(self.config.correspond.max_surface_points);
         let camera = &self.rig.event_camera;
         for (o, name) in self.objects.iter_mut().zip(names) {
             let first = o.state.pose;
@@ -170,7 +170,7 @@ impl TickEngine {
 
     /// Whether any object refines at a tick (the `depth30` baseline refines only at depth exposures).
     pub fn refines(&self, depth_now: bool) -> bool {
-        self.config.depth != DepthUse::DepthFramesOnly || depth_now
+        self.config.modalities.depth != DepthUse::DepthFramesOnly || depth_now
     }
 
     /// Replaces object `k`'s latest estimate with `pose` at `t_us`; `false` for an unknown object or a pose that
@@ -188,9 +188,9 @@ impl TickEngine {
     }
 
     /// Starts each object's render for the next tick, at the times it may come ([`NextTick::candidates`]), unless
-    /// the tracker refines only at depth frames ([`TrackerConfig::prefetch_renders`]).
+    /// the tracker refines only at depth frames ([`crate::track::ExecutionConfig::prefetch_renders`]).
     pub fn prefetch_renders(&mut self) {
-        if !(self.config.prefetch_renders && self.refines(false)) {
+        if !(self.config.execution.prefetch_renders && self.refines(false)) {
             return;
         }
         // What the last tick did not take, the next one will not either.
@@ -211,7 +211,7 @@ impl TickEngine {
         }
         let scene = Scene::objects(&self.scene)
             .geometry_only()
-            .normals_on_surface_grid(self.config.max_surface_points);
+            .normals_on_surface_grid(self.config.correspond.max_surface_points);
         let camera = &self.rig.event_camera;
         // Each object's render is made ahead by the renderer that will step it ([`ObjectStep::run_split`]).
         let share = own_share(self.objects.len(), self.renderers.workers.len());
@@ -284,7 +284,7 @@ impl TickEngine {
     /// transport) and is used now unless it is older than `max_depth_age_ms`, when it is dropped and counted.
     fn depth_for_tick(&mut self, t_us: i64) -> Option<i64> {
         let half = self.rig.clock.half_period_us();
-        let max_age_us = (self.config.max_depth_age_ms * 1e3) as i64;
+        let max_age_us = (self.config.late_depth.max_depth_age_ms * 1e3) as i64;
         match self.depth_t_us {
             Some(td) if (td - t_us).abs() <= half => Some(t_us),
             Some(td) if td < t_us - half && t_us - td <= max_age_us => {
@@ -360,7 +360,7 @@ impl TickEngine {
         // The tracker compares geometry only (no texturing), and reads normals only on the surface grid.
         let scene = Scene::objects(&self.scene)
             .geometry_only()
-            .normals_on_surface_grid(self.config.max_surface_points);
+            .normals_on_surface_grid(self.config.correspond.max_surface_points);
         let step = ObjectStep {
             scene: &scene,
             camera: &self.rig.event_camera,

@@ -278,11 +278,12 @@ impl Redetection {
         let config = frame.config;
         let cfg = config.redetect;
         // A tracker that refines only at depth frames (`depth30`) has no ticks in between to spread over.
-        let budget = if cfg.places_per_tick == 0 || config.depth == DepthUse::DepthFramesOnly {
-            usize::MAX
-        } else {
-            cfg.places_per_tick
-        };
+        let budget =
+            if cfg.places_per_tick == 0 || config.modalities.depth == DepthUse::DepthFramesOnly {
+                usize::MAX
+            } else {
+                cfg.places_per_tick
+            };
         let Some((frame_index, frame_t_us)) = self.frame else {
             return;
         };

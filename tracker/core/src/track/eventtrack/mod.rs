@@ -42,7 +42,7 @@ pub struct EventTrack6d {
     names: Vec<String>,
     render_meshes: Vec<Simplification>,
     /// States at recent depth-exposure ticks and the events since, to track again from a late frame's exposure
-    /// ([`TrackerConfig::retrack_late_depth`]); `None` when off.
+    /// ([`crate::track::LateDepthConfig::retrack_late_depth`]); `None` when off.
     retrack: Option<Box<Retrack>>,
     /// Whether the next tick's renders were started since the latest estimates changed ([`Self::prepare_next_tick`]).
     prepared: bool,
@@ -68,8 +68,9 @@ impl EventTrack6d {
         objects: Vec<TrackedObject>,
         renderer: Box<dyn Renderer + Send>,
     ) -> Result<Self, TrackError> {
-        let retrack = (config.retrack_late_depth && config.max_depth_age_ms > 0.0)
-            .then(|| Box::new(Retrack::new(config.retrack_max_events)));
+        let retrack = (config.late_depth.retrack_late_depth
+            && config.late_depth.max_depth_age_ms > 0.0)
+            .then(|| Box::new(Retrack::new(config.late_depth.retrack_max_events)));
         let (engine, names, render_meshes) = TickEngine::new(config, rig, objects, renderer)?;
         Ok(Self {
             engine,
@@ -82,7 +83,7 @@ impl EventTrack6d {
     }
 
     /// How each object's render mesh was simplified from its CAD mesh, in object order
-    /// ([`TrackerConfig::render_mesh_simplify_above`]).
+    /// ([`crate::track::ExecutionConfig::render_mesh_simplify_above`]).
     pub fn render_meshes(&self) -> &[Simplification] {
         &self.render_meshes
     }
@@ -167,7 +168,7 @@ impl PoseTracker for EventTrack6d {
 
     fn push_events(&mut self, events: &[CdEvent]) {
         let engine = &mut self.engine;
-        if engine.config.events || engine.refines(false) {
+        if engine.config.modalities.events || engine.refines(false) {
             match self.retrack.as_mut() {
                 Some(r) if r.is_logging() => engine.surface.integrate_logged(events, &mut r.log),
                 _ => engine.surface.integrate(events),

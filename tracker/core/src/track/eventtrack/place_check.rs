@@ -104,7 +104,7 @@ impl PlaceCheck<'_> {
             self.inputs.t_us,
             false,
         )?;
-        let max_surface = self.config.max_surface_points;
+        let max_surface = self.config.correspond.max_surface_points;
         let mut render = |scene: &[SceneObject], target: &mut RenderTarget| {
             let scene = Scene::objects(scene)
                 .geometry_only()

@@ -10,7 +10,7 @@ pub(super) struct Renderers {
     /// The tracker thread's renderer.
     pub main: Box<dyn Renderer + Send>,
     /// Forks of `main` for the threads that step objects beside the tracker's own
-    /// ([`TrackerConfig::object_threads`]).
+    /// ([`crate::track::ExecutionConfig::object_threads`]).
     pub workers: Vec<Box<dyn Renderer + Send>>,
     /// The threads the workers step objects and check places on (started at the first tick that needs them).
     pub threads: ObjectThreads,
@@ -20,14 +20,16 @@ impl Renderers {
     /// `main` and as many forks as `objects` objects and the re-detection checks of `config` can use, up to the
     /// configured (or available) threads.
     pub fn new(config: &TrackerConfig, objects: usize, main: Box<dyn Renderer + Send>) -> Self {
-        let threads = match config.object_threads {
+        let threads = match config.execution.object_threads {
             0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
             n => n,
         };
         // Threads step objects and check re-detection places; a single object's places are checked on several.
         let checks_at_once = match config.redetect {
             r if !r.enabled => 1,
-            r if r.places_per_tick == 0 || config.depth == DepthUse::DepthFramesOnly => threads,
+            r if r.places_per_tick == 0 || config.modalities.depth == DepthUse::DepthFramesOnly => {
+                threads
+            }
             r => r.places_per_tick,
         };
         let workers = (1..threads.min(objects.max(checks_at_once)))

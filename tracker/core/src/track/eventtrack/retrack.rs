@@ -142,7 +142,7 @@ impl Retrack {
         let (Some(exposed_us), Some(last_us)) = (engine.depth_t_us, engine.last_tick_us) else {
             return false;
         };
-        let max_age_us = (engine.config.max_depth_age_ms * 1e3) as i64;
+        let max_age_us = (engine.config.late_depth.max_depth_age_ms * 1e3) as i64;
         let (times, count) = engine.next_tick.candidates();
         let next_us = if count > 0 {
             times[0]
@@ -176,7 +176,7 @@ impl Retrack {
         tick: &Tick,
         defer: Deferred,
     ) -> Deferred {
-        let max_age_us = (engine.config.max_depth_age_ms * 1e3) as i64;
+        let max_age_us = (engine.config.late_depth.max_depth_age_ms * 1e3) as i64;
         let half = engine.rig.clock.half_period_us();
         self.checks.clear();
         // Checks made when a frame arrived since the last tick are this tick's.

@@ -41,7 +41,7 @@ pub(super) fn register_between(
     let c_then = model.center_at(then);
     let c_now = model.center_at(now);
     let c = Point3::from((c_then.coords + c_now.coords) * 0.5);
-    let radius = 0.6 * config.roi_scale * model.diameter + 0.08 + 0.5 * (c_now - c_then).norm();
+    let radius = 0.6 * config.roi.roi_scale * model.diameter + 0.08 + 0.5 * (c_now - c_then).norm();
     state.carried.register(frame, rig, &c, radius, t_us);
 }
 
@@ -57,7 +57,7 @@ pub(super) fn capture_neighbourhood(
 ) {
     match state.anchor {
         Some((t_anchor, anchor))
-            if config.depth_fallback_motion_margin >= 0.0
+            if config.safety_net.depth_fallback_motion_margin >= 0.0
                 && state.carried.exposure_us() == Some(t_anchor) =>
         {
             state

@@ -34,7 +34,7 @@ pub(super) fn prepare_depth(
     let roi_camera = inputs.camera.crop(&roi);
     let predicted = state.predicted;
     let mut fresh = inputs.depth.is_some()
-        && match config.depth {
+        && match config.modalities.depth {
             DepthUse::EveryTick | DepthUse::DepthFramesOnly => true,
             DepthUse::FirstFrameOnly => state.depth_frames_used == 0,
             DepthUse::Off => false,
@@ -76,11 +76,11 @@ pub(super) fn prepare_depth(
                 at_predicted: true,
             };
         }
-    } else if config.depth == DepthUse::EveryTick && !state.carried.is_empty() {
+    } else if config.modalities.depth == DepthUse::EveryTick && !state.carried.is_empty() {
         // Rendered at the pose the refinement starts from: here if the occluded outline is hidden, which needs
         // it at the prediction, else in `correspond`.
-        depth.weight = config.carried_depth_weight;
-        if config.hide_occluded_outline && depth.weight > 0.0 {
+        depth.weight = config.modalities.carried_depth_weight;
+        if config.correspond.hide_occluded_outline && depth.weight > 0.0 {
             state
                 .carried
                 .render(&predicted, &roi_camera, &mut scratch.depth_now);
@@ -99,8 +99,11 @@ fn event_window_us(
     config: &TrackerConfig,
 ) -> i64 {
     let speed = state.image_speed(model, camera).max(1.0);
-    let window = ((config.event_window_px / speed) * 1e6) as i64;
-    window.clamp(config.min_event_window_us, config.max_event_window_us)
+    let window = ((config.correspond.event_window_px / speed) * 1e6) as i64;
+    window.clamp(
+        config.correspond.min_event_window_us,
+        config.correspond.max_event_window_us,
+    )
 }
 
 /// Bins the events of this tick's window in the ROI chosen by [`ObjectState::update_roi`], which needs no
@@ -113,7 +116,7 @@ pub(super) fn prepare_events(
     inputs: &TickInputs<'_>,
     config: &TrackerConfig,
 ) {
-    if !config.events {
+    if !config.modalities.events {
         return;
     }
     if let Some(roi) = state.roi {
@@ -148,7 +151,7 @@ pub(super) fn correspond(
         return None;
     }
     let event_term = config.event_term;
-    let use_events = config.events && !scratch.view.contour.is_empty();
+    let use_events = config.modalities.events && !scratch.view.contour.is_empty();
     let use_intensity = use_events && config.intensity_term.weight > 0.0;
     let contrast_max = use_events && event_term.kind == EventTermKind::ContrastMax;
     let use_event_residuals = use_events && !contrast_max;
@@ -204,13 +207,13 @@ fn view_at_prediction(
         roi_camera,
         model.label,
         &predicted,
-        config.max_surface_points,
-        config.max_contour_points,
+        config.correspond.max_surface_points,
+        config.correspond.max_contour_points,
     );
     // A late frame: checked at its exposure, and the refinement starts from the prediction corrected there.
     let late = depth.fresh && state.late_frame.is_some();
     let (predicted, late_fit) = if late {
-        let use_events = config.events && !scratch.view.contour.is_empty();
+        let use_events = config.modalities.events && !scratch.view.contour.is_empty();
         carry_late_depth(
             model, state, scratch, inputs, roi_camera, use_events, config,
         )
@@ -219,13 +222,13 @@ fn view_at_prediction(
     };
     // Outline the depth shows behind a nearer surface (a hand gripping the object) fires no events: leave it
     // out of the event and intensity terms rather than pull it onto the occluder's edges.
-    if config.hide_occluded_outline && depth.weight > 0.0 {
+    if config.correspond.hide_occluded_outline && depth.weight > 0.0 {
         scratch.view.hide_occluded_contour(
             &scratch.depth_now,
             roi_camera,
             &predicted,
             config.depth_term.occlusion_gap,
-            config.hide_occluded_max_share,
+            config.correspond.hide_occluded_max_share,
         );
     }
     (predicted, late, late_fit)
@@ -242,8 +245,8 @@ fn refines_now(
     fresh: bool,
 ) -> bool {
     let awaiting_depth = state.depth_frames_used == 0
-        && (inputs.t_us - state.first_us) as f64 <= config.max_depth_age_ms * 1e3;
-    match config.depth {
+        && (inputs.t_us - state.first_us) as f64 <= config.late_depth.max_depth_age_ms * 1e3;
+    match config.modalities.depth {
         DepthUse::DepthFramesOnly => fresh,
         DepthUse::Off => true,
         DepthUse::EveryTick | DepthUse::FirstFrameOnly => fresh || !awaiting_depth,
@@ -289,7 +292,8 @@ fn search_range(
 ) -> f64 {
     let event_term = config.event_term;
     if state.depth_frames_used < 2
-        || (config.search_wide_when_degraded && state.tracking != TrackingState::Tracking)
+        || (config.correspond.search_wide_when_degraded
+            && state.tracking != TrackingState::Tracking)
     {
         event_term.search_px
     } else {
@@ -329,7 +333,7 @@ fn match_events(
         model.label,
         inputs.t_us,
         window,
-        config.max_event_points,
+        config.correspond.max_event_points,
         prebinned,
     );
     if event_term.kind != EventTermKind::ContrastMax {
@@ -345,7 +349,7 @@ fn match_events(
         inputs.t_us,
         window,
         c.z,
-        config.max_event_points * 8,
+        config.correspond.max_event_points * 8,
     );
     let velocity = scratch.edges.maximise_contrast(
         inputs.camera,

@@ -77,11 +77,12 @@ pub(super) fn fallback_starts(
     let span = (t_us - t_anchor).max(0) as f64 * 1e-6;
     [
         Some((FallbackStart::PreviousDepthPose, *anchor)),
-        config.depth_fallback_extrapolate.then(|| {
+        config.safety_net.depth_fallback_extrapolate.then(|| {
             let start = apply_step(anchor, &model.center_obj, &(state.velocity * span));
             (FallbackStart::Extrapolated, start)
         }),
         config
+            .safety_net
             .depth_fallback_anchored
             .then(|| anchored_extrapolation(model, state, t_us, config))
             .flatten()
@@ -151,8 +152,8 @@ pub(super) fn probe_depth(
         &roi_camera,
         model.label,
         &start,
-        config.max_surface_points,
-        config.max_contour_points,
+        config.correspond.max_surface_points,
+        config.correspond.max_contour_points,
     );
     if scratch.view.surface.is_empty() {
         return None;

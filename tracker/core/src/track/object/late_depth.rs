@@ -151,9 +151,9 @@ fn check_at_exposure(
     use_events: bool,
     config: &TrackerConfig,
 ) -> Option<Settled> {
-    let anchor = state
-        .anchor
-        .filter(|&(t, _)| t < exposed_us && use_events && config.depth_fallback_margin >= 0.0);
+    let anchor = state.anchor.filter(|&(t, _)| {
+        t < exposed_us && use_events && config.safety_net.depth_fallback_margin >= 0.0
+    });
     let starts = anchor.map(|(t_anchor, anchor)| {
         fallback_starts(model, state, t_anchor, &anchor, exposed_us, config)
     });
@@ -201,7 +201,7 @@ fn check_at_exposure(
         });
         settled[k] = Some(s);
     }
-    check.replaced_by = check.replacement(&config.fallback_rule());
+    check.replaced_by = check.replacement(&config.safety_net.fallback_rule());
     state.fallback_check = Some(check);
     match check.replaced_by.and_then(|k| settled[k]) {
         Some(s) => {
@@ -237,8 +237,15 @@ fn roi_covering<'a>(
         if c.z <= 1e-3 {
             return None;
         }
-        let scale = config.roi_scale + gap / model.diameter;
-        Roi::around_object(inputs.camera, &c, model.diameter, scale, config.roi_size).ok()?
+        let scale = config.roi.roi_scale + gap / model.diameter;
+        Roi::around_object(
+            inputs.camera,
+            &c,
+            model.diameter,
+            scale,
+            config.roi.roi_size,
+        )
+        .ok()?
     } else {
         state.roi_at(model, then, inputs.camera, config, inputs.t_us, false)?
     };

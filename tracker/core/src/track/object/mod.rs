@@ -238,7 +238,7 @@ fn assess_tick(
     if start.depth.fresh
         && !start.late
         && start.use_events
-        && config.depth_fallback_margin >= 0.0
+        && config.safety_net.depth_fallback_margin >= 0.0
         && let Some(anchor) = state.anchor
     {
         let kept = safety_net::check(

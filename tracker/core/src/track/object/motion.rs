@@ -32,16 +32,17 @@ pub(super) fn anchored_extrapolation(
 }
 
 /// Scales a motion (centre m/s, angular rad/s) down to the speeds the motion model accepts
-/// ([`TrackerConfig::max_speed`], [`TrackerConfig::max_angular_speed`]), keeping its directions.
+/// ([`crate::track::MotionConfig::max_speed`], [`crate::track::MotionConfig::max_angular_speed`]), keeping its directions.
 pub(super) fn cap_motion(v: &mut Vector6<f64>, config: &TrackerConfig) {
     let lin = v.fixed_rows::<3>(0).norm();
-    if lin > config.max_speed {
-        v.fixed_rows_mut::<3>(0).scale_mut(config.max_speed / lin);
+    if lin > config.motion.max_speed {
+        v.fixed_rows_mut::<3>(0)
+            .scale_mut(config.motion.max_speed / lin);
     }
     let ang = v.fixed_rows::<3>(3).norm();
-    if ang > config.max_angular_speed {
+    if ang > config.motion.max_angular_speed {
         v.fixed_rows_mut::<3>(3)
-            .scale_mut(config.max_angular_speed / ang);
+            .scale_mut(config.motion.max_angular_speed / ang);
     }
 }
 
@@ -62,9 +63,9 @@ pub(super) fn record_estimate(
         (true, Some((t0, p0))) if inputs.t_us > t0 => (
             p0,
             (inputs.t_us - t0) as f64 * 1e-6,
-            config.velocity_smoothing_depth,
+            config.motion.velocity_smoothing_depth,
         ),
-        _ => (state.pose, inputs.dt_s, config.velocity_smoothing),
+        _ => (state.pose, inputs.dt_s, config.motion.velocity_smoothing),
     };
     if fresh_depth {
         state.anchor_before = state.anchor;
@@ -193,7 +194,7 @@ mod tests {
         let same = anchored_extrapolation(&model, &track, 33_333, &config).unwrap();
         assert!((same.translation.vector - Vector3::new(0.02, 0.0, 0.6)).norm() < 1e-9);
         // The speed is capped like the velocity's: at 0.3 m/s the 33.3 ms carry 1 cm, not 2.
-        config.max_speed = 0.3;
+        config.motion.max_speed = 0.3;
         let capped = anchored_extrapolation(&model, &track, 66_666, &config).unwrap();
         assert!((capped.translation.x - 0.03).abs() < 1e-4, "{capped:?}");
         // A re-detection forgets both anchors.

@@ -14,7 +14,7 @@ use crate::track::config::TrackerConfig;
 use nalgebra::Isometry3;
 use scene::geometry::Roi;
 
-/// The optimiser a tick's refinement runs: [`TrackerConfig::iterations`] steps bounded the way the paper's
+/// The optimiser a tick's refinement runs: [`crate::track::OptimiserConfig::iterations`] steps bounded the way the paper's
 /// refiner is (`max_step_rotation_deg`, `max_step_translation_diameters` of the object's diameter), with the prior
 /// towards the start. `converged_below`: stop once a step is smaller (translation m, rotation rad).
 pub(super) fn optimiser(
@@ -23,13 +23,16 @@ pub(super) fn optimiser(
     converged_below: Option<(f64, f64)>,
 ) -> Optimiser {
     Optimiser {
-        iterations: config.iterations,
-        damping: config.damping,
+        iterations: config.optimiser.iterations,
+        damping: config.optimiser.damping,
         bounds: StepBounds {
-            max_rotation: config.max_step_rotation_deg.to_radians(),
-            max_translation: config.max_step_translation_diameters * model.diameter,
+            max_rotation: config.optimiser.max_step_rotation_deg.to_radians(),
+            max_translation: config.optimiser.max_step_translation_diameters * model.diameter,
         },
-        prior: StartPrior::from_sigmas(config.prior_translation_m, config.prior_rotation_rad()),
+        prior: StartPrior::from_sigmas(
+            config.optimiser.prior_translation_m,
+            config.optimiser.prior_rotation_rad(),
+        ),
         converged_below,
     }
 }
@@ -64,7 +67,7 @@ pub(super) fn optimise(
         motion: &state.velocity,
         center_obj: &model.center_obj,
         window_s: start.window_s,
-        weight: config.event_weight,
+        weight: config.modalities.event_weight,
     };
     let mut intensity = IntensityModality {
         active: start.use_intensity,

@@ -73,7 +73,7 @@ pub(super) fn check(
         });
         candidate_stats[k] = Some(stats);
     }
-    check.replaced_by = check.replacement(&config.fallback_rule());
+    check.replaced_by = check.replacement(&config.safety_net.fallback_rule());
     let replacement = check
         .replaced_by
         .and_then(|k| Some((check.candidates[k]?, candidate_stats[k]?)));

@@ -27,18 +27,21 @@ pub(crate) struct TickScratch {
 impl TickScratch {
     /// Buffers sized for `config`'s ROI and point counts.
     pub fn new(config: &TrackerConfig) -> Self {
-        let n = config.roi_size as usize;
+        let n = config.roi.roi_size as usize;
         Self {
-            target: RenderTarget::with_capacity(config.roi_size, config.roi_size),
-            view: ModelView::with_capacity(config.max_surface_points, config.max_contour_points),
+            target: RenderTarget::with_capacity(config.roi.roi_size, config.roi.roi_size),
+            view: ModelView::with_capacity(
+                config.correspond.max_surface_points,
+                config.correspond.max_contour_points,
+            ),
             depth_now: DepthImage {
-                width: config.roi_size,
-                height: config.roi_size,
+                width: config.roi.roi_size,
+                height: config.roi.roi_size,
                 z: Vec::with_capacity(n * n),
             },
             late_depth: DepthImage {
-                width: config.roi_size,
-                height: config.roi_size,
+                width: config.roi.roi_size,
+                height: config.roi.roi_size,
                 z: Vec::with_capacity(n * n),
             },
             edges: EventEdges::default(),

@@ -214,10 +214,10 @@ impl ObjectState {
         dt_s: f64,
         config: &TrackerConfig,
     ) -> Isometry3<f64> {
-        if config.prediction && self.tracking != TrackingState::Lost {
+        if config.motion.prediction && self.tracking != TrackingState::Lost {
             let dt_s = dt_s.min(MAX_PREDICTION_S);
-            let mut xi = self.velocity * (dt_s * config.prediction_gain);
-            if !config.predict_rotation {
+            let mut xi = self.velocity * (dt_s * config.motion.prediction_gain);
+            if !config.motion.predict_rotation {
                 xi.fixed_rows_mut::<3>(3).fill(0.0);
             }
             apply_step(&self.pose, &model.center_obj, &xi)
@@ -252,11 +252,11 @@ impl ObjectState {
         depth_due: bool,
     ) -> Option<Roi> {
         let mut c = model.center_at(predicted);
-        let mut scale = config.roi_scale;
+        let mut scale = config.roi.roi_scale;
         if depth_due
-            && config.depth_fallback_extrapolate
-            && config.depth_fallback_margin >= 0.0
-            && config.roi_widen_at_depth
+            && config.safety_net.depth_fallback_extrapolate
+            && config.safety_net.depth_fallback_margin >= 0.0
+            && config.roi.roi_widen_at_depth
             && let Some((t_anchor, anchor)) = self.anchor
         {
             let span = (t_us - t_anchor).max(0) as f64 * 1e-6;
@@ -272,7 +272,7 @@ impl ObjectState {
         if !(c.z > 1e-3 && c.coords.iter().all(|v| v.is_finite())) {
             return None;
         }
-        Roi::around_object(camera, &c, model.diameter, scale, config.roi_size).ok()
+        Roi::around_object(camera, &c, model.diameter, scale, config.roi.roi_size).ok()
     }
 
     /// Image speed of the object's outline predicted from the velocity, full-image pixels per second.
@@ -413,7 +413,7 @@ mod tests {
         track.velocity = Vector6::new(2.0, 0.0, 0.0, 0.0, 0.0, 0.0);
         let x = |dt: f64| track.prediction(&model, dt, &config).translation.x;
         // One tick: 2 m/s x 8.3 ms x the prediction gain.
-        assert!((x(1.0 / 120.0) - 2.0 / 120.0 * config.prediction_gain).abs() < 1e-12);
+        assert!((x(1.0 / 120.0) - 2.0 / 120.0 * config.motion.prediction_gain).abs() < 1e-12);
         // Past the horizon (ticks resuming after a trigger outage) the object is not flung away.
         assert_eq!(x(5.0), x(MAX_PREDICTION_S));
         assert!(x(5.0) < 0.11, "{}", x(5.0));
@@ -436,7 +436,7 @@ mod tests {
         let extrapolated = Point3::new(0.1, 0.0, 0.6);
         let plain = track.update_roi(&model, &camera, &config, t, true).unwrap();
         assert!(!contains(&plain, &camera, &extrapolated, 0.0));
-        config.roi_widen_at_depth = true;
+        config.roi.roi_widen_at_depth = true;
         let between = track
             .update_roi(&model, &camera, &config, t, false)
             .unwrap();
