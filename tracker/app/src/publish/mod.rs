@@ -6,7 +6,10 @@
 pub mod can;
 pub mod csv;
 pub mod ros2;
+mod shared;
 pub mod zenoh;
+
+pub use shared::SharedSink;
 
 use drivers::timeline::Tick;
 use std::time::Instant;

@@ -15,6 +15,7 @@ pub mod depth_arrival;
 mod error;
 pub mod health;
 pub mod latency_log;
+mod priority;
 pub mod queue;
 pub mod replay;
 mod revision;

@@ -4,7 +4,7 @@
 use super::config::Config;
 use super::error::RuntimeError;
 use super::setup::OutputPaths;
-use super::worker::SharedSink;
+use crate::publish::SharedSink;
 use crate::publish::zenoh::ZenohPosePublisher;
 use crate::publish::{PoseSink, PublishError};
 use std::path::PathBuf;

@@ -6,6 +6,7 @@
 use super::depth_arrival::DepthArrival;
 use super::health::Health;
 use super::latency_log::{LatencyLog, TickTiming};
+use super::priority::set_fifo_priority;
 use super::queue::{Ingest, IngestQueue};
 use super::revision::PoseRevisions;
 use crate::publish::{PoseSink, TickPoses};
@@ -13,72 +14,6 @@ use drivers::timeline::TimelineConfig;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 use tracker::track::{DepthHandling, PoseEstimate, PoseTracker, TickDriver};
-
-/// A pose sink shared between the tracker thread and another task (e.g. the status timer of the zenoh sink).
-pub struct SharedSink<S: PoseSink> {
-    name: String,
-    inner: Arc<Mutex<S>>,
-}
-
-impl<S: PoseSink> SharedSink<S> {
-    /// Wraps `inner`; its name is read once here.
-    pub fn new(inner: Arc<Mutex<S>>) -> Self {
-        let name = inner
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .name()
-            .to_string();
-        Self { name, inner }
-    }
-
-    fn lock(&self) -> MutexGuard<'_, S> {
-        self.inner.lock().unwrap_or_else(|p| p.into_inner())
-    }
-}
-
-impl<S: PoseSink> PoseSink for SharedSink<S> {
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn publish(&mut self, poses: &TickPoses<'_>) -> Result<(), crate::publish::PublishError> {
-        self.lock().publish(poses)
-    }
-    fn counters(&self) -> crate::publish::SinkCounters {
-        self.lock().counters()
-    }
-    fn flush(&mut self) -> Result<(), crate::publish::PublishError> {
-        self.lock().flush()
-    }
-    fn revise(&mut self, revised: &[tracker::track::PoseEstimate]) {
-        self.lock().revise(revised);
-    }
-}
-
-/// Asks for `SCHED_FIFO` at `priority` for the calling thread.
-#[cfg(target_os = "linux")]
-fn set_fifo_priority(priority: u8) -> Result<(), String> {
-    let param = libc::sched_param {
-        sched_priority: i32::from(priority),
-    };
-    // SAFETY: pthread_self() is the calling thread; `param` is a valid, initialised sched_param.
-    let rc = unsafe { libc::pthread_setschedparam(libc::pthread_self(), libc::SCHED_FIFO, &param) };
-    if rc == 0 {
-        Ok(())
-    } else {
-        Err(format!(
-            "SCHED_FIFO priority {priority} refused for the tracker thread ({}); running with normal scheduling",
-            std::io::Error::from_raw_os_error(rc)
-        ))
-    }
-}
-
-/// Real-time scheduling is only implemented on Linux.
-#[cfg(not(target_os = "linux"))]
-fn set_fifo_priority(priority: u8) -> Result<(), String> {
-    Err(format!(
-        "SCHED_FIFO priority {priority}: real-time scheduling is only supported on Linux; running with normal scheduling"
-    ))
-}
 
 /// What the tracker thread reports when it ends.
 pub struct WorkerEnd {
@@ -356,11 +291,36 @@ impl Worker {
         }
     }
 
+    /// One tick: track, publish, record health, hand over revisions, then start the next tick's work.
     fn tick(&mut self, tick: &drivers::timeline::Tick, decoded_at: Instant) {
-        self.estimates.clear();
         let tick_start = Instant::now();
+        self.estimates.clear();
         self.tracker.tick(tick, &mut self.estimates);
         let tick_end = Instant::now();
+        self.publish(tick, decoded_at);
+        let total = decoded_at.elapsed();
+        self.record_health(tick, total);
+        self.revisions.published(&self.estimates);
+        // A frame the tracker kept for this tick may have made it track the ticks before again.
+        self.revise_published();
+        self.last_tick_us = Some(tick.t_us);
+        self.last_waited = tick_start.saturating_duration_since(decoded_at);
+        let prepare = self.prepare_next_tick();
+        if let Some(log) = &mut self.latency_log {
+            log.record(&TickTiming {
+                t_us: tick.t_us,
+                depth: tick.depth_frame.is_some(),
+                waited: self.last_waited,
+                tick: tick_end - tick_start,
+                sinks: total.saturating_sub(tick_end.saturating_duration_since(decoded_at)),
+                latency: total,
+                prepare,
+            });
+        }
+    }
+
+    /// Hands the tick's estimates to every sink, timing each; a sink's first error is printed, every one counted.
+    fn publish(&mut self, tick: &drivers::timeline::Tick, decoded_at: Instant) {
         let poses = TickPoses {
             tick,
             estimates: &self.estimates,
@@ -381,7 +341,11 @@ impl Worker {
                 self.sink_failed[i] = Some(e.to_string());
             }
         }
-        let total = decoded_at.elapsed();
+    }
+
+    /// Records the tick in the health report: counts, latency from the trigger edge's decoding to the last sink
+    /// (`total`), queue and timeline counters, each sink's latency and errors, each object's latest state.
+    fn record_health(&mut self, tick: &drivers::timeline::Tick, total: Duration) {
         let now = Instant::now();
         let first = *self.first_tick_wall.get_or_insert(now);
         let queue = self.queue.counters();
@@ -411,14 +375,11 @@ impl Worker {
                 o.t_us = Some(e.t_us);
             }
         }
-        drop(h);
-        self.revisions.published(&self.estimates);
-        // A frame the tracker kept for this tick may have made it track the ticks before again.
-        self.revise_published();
-        self.last_tick_us = Some(tick.t_us);
-        self.last_waited = tick_start.saturating_duration_since(decoded_at);
-        // The poses are out: start the next tick's work (its renders, and tracking again for a frame deferred)
-        // in the time until it arrives.
+    }
+
+    /// With the poses out, starts the next tick's work in the time until it arrives: its renders, and tracking
+    /// again from a depth frame handed over deferred (whose revisions go to the sinks). Returns the time it took.
+    fn prepare_next_tick(&mut self) -> Duration {
         let prepare_start = Instant::now();
         self.tracker.prepare_next_tick();
         if let Some(t_us) = self.deferred_depth_us.take() {
@@ -427,17 +388,7 @@ impl Worker {
             self.health().depth_arrival.record(work);
             self.revise_published();
         }
-        if let Some(log) = &mut self.latency_log {
-            log.record(&TickTiming {
-                t_us: tick.t_us,
-                depth: tick.depth_frame.is_some(),
-                waited: tick_start.saturating_duration_since(decoded_at),
-                tick: tick_end - tick_start,
-                sinks: total.saturating_sub(tick_end.saturating_duration_since(decoded_at)),
-                latency: total,
-                prepare: prepare_start.elapsed(),
-            });
-        }
+        prepare_start.elapsed()
     }
 }
 
