@@ -191,6 +191,7 @@ CRATES = {
     "hil_sim_bin": "hil-sim/src/main.rs",
     "firmware_trigger": "firmware-trigger/src/lib.rs",
     "eventtrack6d_tests": "tests/src/lib.rs",
+    "cli_reference": "tools/cli-reference/src/lib.rs",
 }
 
 # Which of the workspace's packages each package may depend on (normal dependencies; DESIGN.md section 2,
@@ -200,10 +201,11 @@ ALLOWED = {
     "eventtrack6d-scene": set(),
     "eventtrack6d-core": {"drivers", "scene"},
     "eventtrack6d-eval": {"drivers", "scene", "tracker"},
-    "eventtrack6d": {"drivers", "scene", "tracker", "eval"},
-    "hil-sim": {"drivers", "scene"},
+    "eventtrack6d": {"drivers", "scene", "tracker", "eval", "cli-reference"},
+    "hil-sim": {"drivers", "scene", "cli-reference"},
     "firmware-trigger": set(),
     "eventtrack6d-tests": None,  # anything
+    "cli-reference": set(),
 }
 MANIFESTS = {
     "eventtrack6d-drivers": "drivers/Cargo.toml",
@@ -214,8 +216,9 @@ MANIFESTS = {
     "hil-sim": "hil-sim/Cargo.toml",
     "firmware-trigger": "firmware-trigger/Cargo.toml",
     "eventtrack6d-tests": "tests/Cargo.toml",
+    "cli-reference": "tools/cli-reference/Cargo.toml",
 }
-OURS = {"drivers", "scene", "tracker", "eval", "eventtrack6d", "hil-sim", "firmware-trigger"}
+OURS = {"drivers", "scene", "tracker", "eval", "eventtrack6d", "hil-sim", "firmware-trigger", "cli-reference"}
 
 
 def crate_violations():

@@ -1,7 +1,5 @@
 //! `hil-sim`: the hardware-in-the-loop simulator's command-line tool.
 
-mod reference;
-
 use anyhow::Context;
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{CommandFactory, Parser, Subcommand};
@@ -150,11 +148,22 @@ fn speed_parser() -> impl TypedValueParser<Value = SpeedLevel> {
         .try_map(|s| s.parse::<SpeedLevel>())
 }
 
+/// What `hil-sim reference` (docs/commands-hil-sim.md) says besides the commands.
+const REFERENCE_PAGE: cli_reference::Page<'static> = cli_reference::Page {
+    defined_in: "hil-sim/src/main.rs",
+    regenerate: "ET6D_WRITE_DOCS=1 cargo test -p hil-sim --test reference",
+    see_also: "The tracker's commands are in [commands.md](commands.md); the recordings it writes are specified in \
+               [recording-format.md](recording-format.md).",
+};
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Reference => {
-            reference::run(Cli::command());
+            print!(
+                "{}",
+                cli_reference::markdown(Cli::command(), &REFERENCE_PAGE)
+            );
             Ok(())
         }
         Command::Suite { name, out, jobs } => run_suite(&name, &out, jobs),

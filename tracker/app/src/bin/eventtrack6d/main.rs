@@ -9,7 +9,6 @@ mod evaluate;
 mod inspect;
 mod paths;
 mod progress;
-mod reference;
 mod run;
 mod session;
 mod track;
@@ -39,6 +38,14 @@ enum Command {
     Reference,
 }
 
+/// What `eventtrack6d reference` (docs/commands.md) says besides the commands.
+const REFERENCE_PAGE: cli_reference::Page<'static> = cli_reference::Page {
+    defined_in: "tracker/app/src/bin/eventtrack6d/",
+    regenerate: "ET6D_WRITE_DOCS=1 cargo test -p eventtrack6d --test reference",
+    see_also: "The simulator's commands are in [commands-hil-sim.md](commands-hil-sim.md); the configuration files \
+               and what `demo` and `run` print are described in [runtime.md](runtime.md).",
+};
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -50,7 +57,10 @@ fn main() -> ExitCode {
         Command::Demo(args) => demo::run(&args),
         Command::Track(args) => track::run(&args),
         Command::Reference => {
-            reference::run(Cli::command());
+            print!(
+                "{}",
+                cli_reference::markdown(Cli::command(), &REFERENCE_PAGE)
+            );
             Ok(())
         }
     };
