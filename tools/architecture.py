@@ -192,20 +192,22 @@ CRATES = {
     "firmware_trigger": "firmware-trigger/src/lib.rs",
     "eventtrack6d_tests": "tests/src/lib.rs",
     "cli_reference": "tools/cli-reference/src/lib.rs",
+    "usbip": "usbip/src/lib.rs",
 }
 
 # Which of the workspace's packages each package may depend on (normal dependencies; DESIGN.md section 2,
-# docs/architecture.md): drivers <- scene <- core <- eval, app; hil-sim <- drivers, scene; tests may use all.
+# docs/architecture.md): drivers <- scene <- core <- eval, app; hil-sim <- drivers, scene, usbip; tests may use all.
 ALLOWED = {
     "eventtrack6d-drivers": set(),
     "eventtrack6d-scene": set(),
     "eventtrack6d-core": {"drivers", "scene"},
     "eventtrack6d-eval": {"drivers", "scene", "tracker"},
     "eventtrack6d": {"drivers", "scene", "tracker", "eval", "cli-reference"},
-    "hil-sim": {"drivers", "scene", "cli-reference"},
+    "hil-sim": {"drivers", "scene", "cli-reference", "usbip"},
     "firmware-trigger": set(),
     "eventtrack6d-tests": None,  # anything
     "cli-reference": set(),
+    "eventtrack6d-usbip": set(),
 }
 MANIFESTS = {
     "eventtrack6d-drivers": "drivers/Cargo.toml",
@@ -217,8 +219,9 @@ MANIFESTS = {
     "firmware-trigger": "firmware-trigger/Cargo.toml",
     "eventtrack6d-tests": "tests/Cargo.toml",
     "cli-reference": "tools/cli-reference/Cargo.toml",
+    "eventtrack6d-usbip": "usbip/Cargo.toml",
 }
-OURS = {"drivers", "scene", "tracker", "eval", "eventtrack6d", "hil-sim", "firmware-trigger", "cli-reference"}
+OURS = {"drivers", "scene", "tracker", "eval", "eventtrack6d", "hil-sim", "firmware-trigger", "cli-reference", "usbip"}
 
 
 def crate_violations():
