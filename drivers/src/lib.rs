@@ -6,8 +6,10 @@
 
 pub mod anomaly;
 pub mod event;
+pub mod evk4;
 pub mod formats;
 pub mod raw;
 pub mod recording;
 pub mod summary;
 pub mod timeline;
+pub mod transfer_ring;

@@ -52,6 +52,8 @@ pub struct Evt3Decoder {
     have_base: bool,
     vect_polarity: bool,
     in_vendor_group: bool,
+    /// Whether a TIME_HIGH was ever seen (the time base survives a resynchronisation).
+    had_time: bool,
     anomalies: DecodeAnomalies,
 }
 
@@ -73,8 +75,20 @@ impl Evt3Decoder {
             have_base: false,
             vect_polarity: false,
             in_vendor_group: false,
+            had_time: false,
             anomalies: DecodeAnomalies::default(),
         }
+    }
+
+    /// Forgets the position in the stream after a gap (bytes lost in transit): a held-back partial word is
+    /// counted as [`AnomalyKind::TruncatedWord`], and words are skipped (counted as skipped before sync) until
+    /// the next TIME_HIGH and row. The time base is kept, so a wrap of the 24-bit counter during a gap shorter
+    /// than about 8 s is still recognised and times stay monotonic.
+    pub fn resynchronise(&mut self) {
+        self.finish();
+        self.sync = Sync::WaitTime;
+        self.have_base = false;
+        self.in_vendor_group = false;
     }
 
     /// Counters of skipped words so far.
@@ -194,6 +208,10 @@ impl Evt3Decoder {
                 let high = w & 0x0FFF;
                 if self.sync == Sync::WaitTime {
                     self.sync = Sync::WaitRow;
+                    if self.had_time && high < self.time_high && self.time_high - high >= 2048 {
+                        self.loop_base += 1 << 24;
+                    }
+                    self.had_time = true;
                 } else if high < self.time_high {
                     if self.time_high - high >= 2048 {
                         self.loop_base += 1 << 24;
