@@ -12,3 +12,4 @@ pub mod preview;
 pub mod rig;
 pub mod rng;
 pub mod suite;
+pub mod usb_camera;

@@ -131,6 +131,7 @@ enum Command {
         #[arg(long, value_name = "N", default_value_t = 1)]
         seed: u64,
     },
+    UsbCamera(hil_sim::usb_camera::args::UsbCameraArgs),
     /// Print the command reference (docs/commands-hil-sim.md) as Markdown, from these commands' own help texts.
     #[command(hide = true)]
     Reference,
@@ -167,6 +168,7 @@ fn main() -> ExitCode {
             Ok(())
         }
         Command::Suite { name, out, jobs } => run_suite(&name, &out, jobs),
+        Command::UsbCamera(args) => args.options().and_then(|o| hil_sim::usb_camera::serve(&o)),
         Command::Preview { dir, at, out } => {
             let out = out.unwrap_or_else(|| dir.join("preview"));
             hil_sim::preview::write_previews(&dir, &at, &out)

@@ -10,6 +10,7 @@
 //!
 //! Entry point: [`run`] (a [`Config`] and [`Hooks`] in, a [`Summary`] out).
 
+mod assembly;
 pub mod config;
 pub mod depth_arrival;
 mod error;
