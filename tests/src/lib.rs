@@ -6,3 +6,5 @@ pub mod dbc;
 pub mod render_hook;
 /// A tracker in steady state on a generated recording (tick benchmark, no-allocation test).
 pub mod tick_fixture;
+/// The test VM with the kernel's USB/IP host side (`tests/vm/`).
+pub mod vm;

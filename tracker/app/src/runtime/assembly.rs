@@ -89,6 +89,12 @@ pub(super) struct StreamAssembler<'a> {
     /// Frames exposed but not yet delivered (exposure time, arrival time, frame), oldest first.
     in_transit: VecDeque<(i64, i64, Box<DepthFrame>)>,
     stats: SourceStats,
+    /// Stream time after which nothing more is delivered (first event plus the run's length), once known.
+    end_us: Option<i64>,
+    /// The run's length in stream time, microseconds (0: unlimited).
+    limit_us: i64,
+    /// Whether the stream reached `end_us`.
+    reached_end: bool,
 }
 
 impl StreamAssembler<'_> {
@@ -274,7 +280,33 @@ impl<'a> StreamAssembler<'a> {
             transport,
             in_transit: VecDeque::with_capacity(16),
             stats: SourceStats::default(),
+            end_us: None,
+            limit_us: 0,
+            reached_end: false,
         }
+    }
+
+    /// The same assembler delivering only the first `seconds` of stream time (0: all of it).
+    pub(super) fn with_max_seconds(mut self, seconds: f64) -> Self {
+        self.limit_us = (seconds * 1e6).round() as i64;
+        self
+    }
+
+    /// Whether the stream passed the run's length: the source should end.
+    pub(super) fn reached_end(&self) -> bool {
+        self.reached_end
+    }
+
+    /// Whether a record at `t_us` lies past the run's length (and, if so, notes that the end is reached).
+    fn past_end(&mut self, t_us: i64) -> bool {
+        if self.limit_us <= 0 {
+            return false;
+        }
+        let end = *self.end_us.get_or_insert(t_us + self.limit_us);
+        if t_us > end {
+            self.reached_end = true;
+        }
+        self.reached_end
     }
 
     /// Delivers a decoded chunk: its CD events and trigger edges merged by time (edges first at equal times).
@@ -287,6 +319,14 @@ impl<'a> StreamAssembler<'a> {
                 (None, Some(_)) => true,
                 _ => false,
             };
+            let t_us = if take_edge {
+                chunk.triggers[j].t_us
+            } else {
+                chunk.cd[i].t_us
+            };
+            if self.past_end(t_us) {
+                return;
+            }
             if take_edge {
                 self.trigger(chunk.triggers[j]);
                 j += 1;

@@ -16,6 +16,7 @@ pub mod depth_arrival;
 mod error;
 pub mod health;
 pub mod latency_log;
+pub mod live;
 mod priority;
 pub mod queue;
 pub mod replay;
@@ -32,7 +33,7 @@ pub use health::{Health, LatencyHistogram, LatencySummary};
 pub use latency_log::{LATENCY_LOG_HEADER, LatencyLog, TickTiming};
 pub use setup::{OutputPaths, SceneObject, TrackerScene, build_tracker};
 pub use sinks::StatusPut;
-pub use source::{Source, SourceError, SourceOutput, SourceStats, StopFlag};
+pub use source::{Source, SourceError, SourceOutput, SourceStats, StopFlag, UsbStats};
 pub use summary::{SinkSummary, Summary};
 
 use queue::{Ingest, IngestQueue};
@@ -127,7 +128,9 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
         objects,
         outputs,
         status_period: Duration::from_millis(config.status.period_ms),
-        wait_for_room: config.source.pace == Pace::Fast,
+        // A live camera's overload buffer is the transfer ring at the USB side (dropping, counted): the
+        // ingest queue waits for room behind it.
+        wait_for_room: config.source.pace == Pace::Fast || config.source.kind == SourceKind::Live,
         rt_priority: config.tracker.realtime_priority,
         latency_log,
         // Holding a frame compares the stream's clock with the wall clock: only where they run together.

@@ -18,6 +18,7 @@ pub struct ReplaySource {
     batch_us: i64,
     start_delay: Duration,
     depth_transport: DepthTransport,
+    max_seconds: f64,
 }
 
 impl ReplaySource {
@@ -37,6 +38,7 @@ impl ReplaySource {
             batch_us: batch_us.max(1),
             start_delay,
             depth_transport: DepthTransport::default(),
+            max_seconds: 0.0,
         }
     }
 
@@ -53,6 +55,12 @@ impl ReplaySource {
     /// time as the offline driver draws it ([`DepthTransport`]); frames stay in order.
     pub fn with_depth_jitter(mut self, jitter_us: i64) -> Self {
         self.depth_transport = DepthTransport::new(self.depth_transport.latency_us, jitter_us);
+        self
+    }
+
+    /// The same replay ending after `seconds` of recording time from its first event (0: at its end).
+    pub fn with_max_seconds(mut self, seconds: f64) -> Self {
+        self.max_seconds = seconds;
         self
     }
 
@@ -87,7 +95,8 @@ impl Source for ReplaySource {
             (self.batch_events, self.batch_us),
             self.depth_transport,
             stop,
-        );
+        )
+        .with_max_seconds(self.max_seconds);
         let deadline = Instant::now() + self.start_delay;
         while Instant::now() < deadline && !stop.is_set() {
             std::thread::sleep(Duration::from_millis(10).min(deadline - Instant::now()));
@@ -104,7 +113,7 @@ impl Source for ReplaySource {
                 .read_chunk(&mut chunk)
                 .map_err(|e| SourceError::Input(e.to_string()))?;
             r.feed(&chunk, stop);
-            if !more {
+            if !more || r.reached_end() {
                 break;
             }
         }

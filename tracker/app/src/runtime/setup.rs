@@ -1,14 +1,18 @@
 //! Building the pieces of a run from a configuration: the scene (cameras, objects, first poses), the tracker
 //! ([`build_tracker`]), the source and the sinks.
 
+use super::config::validate_live;
 use super::config::{Config, ObjectConfig, SourceKind};
 use super::error::RuntimeError;
 use super::latency_log::LatencyLog;
+use super::live::{Backoff, LiveEvk4Source};
 use super::replay::ReplaySource;
 use super::source::{Source, SourceError};
 use crate::publish::PoseSink;
 use crate::publish::csv::CsvPoseSink;
 use drivers::event::{CdEvent, EventSink, TriggerEdge};
+use drivers::evk4::camera::SensorSettings;
+use drivers::evk4::stream::StreamConfig;
 use drivers::recording::{CameraRig, ModelInfo, Recording};
 use drivers::timeline::TimelineConfig;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
@@ -235,15 +239,67 @@ pub fn build_source(
                 Duration::from_millis(config.source.start_delay_ms),
             )
             .with_depth_latency((config.source.depth_latency_ms * 1e3).round() as i64)
-            .with_depth_jitter((config.source.depth_latency_jitter_ms * 1e3).round() as i64);
+            .with_depth_jitter((config.source.depth_latency_jitter_ms * 1e3).round() as i64)
+            .with_max_seconds(config.source.max_seconds);
             Ok((Box::new(source), scene, timeline))
         }
-        SourceKind::Live => Err(RuntimeError::Source(SourceError::NotImplemented(
-            "live EVK4 source not implemented yet: the EVK4 (USB) and D435i drivers are still to come; \
-             replay a recording instead (source.kind = \"replay\") or run `eventtrack6d demo`"
-                .into(),
-        ))),
+        SourceKind::Live => build_live_source(config),
     }
+}
+
+/// The live source of a configuration: the EVK4, with the depth of a recording until a live depth camera is
+/// there.
+fn build_live_source(
+    config: &Config,
+) -> Result<(Box<dyn Source>, TrackerScene, TimelineConfig), RuntimeError> {
+    let Some(live) = &config.live else {
+        return Err(RuntimeError::Tracker(
+            "source.kind = \"live\" needs a [live] table".into(),
+        ));
+    };
+    let Some(depth_dir) = live
+        .depth_recording
+        .as_ref()
+        .filter(|_| live.depth_camera == "recording")
+    else {
+        return Err(RuntimeError::Source(SourceError::NotImplemented(
+            "live.depth_camera = \"d435i\": the live D435i driver is not implemented yet; use \
+             depth_camera = \"recording\" with depth_recording to run the live EVK4 with a recording's depth"
+                .into(),
+        )));
+    };
+    let rec = Recording::open(depth_dir)?;
+    let scene = recording_scene(&rec, &config.objects)?;
+    let mut schedule = rec.meta.trigger;
+    schedule.channel = live.trigger_channel;
+    let invalid = |key: &str, m: String| RuntimeError::Tracker(format!("live.{key}: {m}"));
+    let settings = SensorSettings {
+        biases: validate_live::bias_offsets(live).map_err(|m| invalid("biases", m))?,
+        erc_events_per_period: validate_live::erc_target(live)
+            .map_err(|m| invalid("erc_events_per_second", m))?,
+    };
+    let transfer_bytes = live.usb_transfer_kib * 1024;
+    let stream = StreamConfig {
+        transfers: live.usb_transfers,
+        transfer_bytes,
+        ring_slots: (live.ring_mib * 1024 * 1024)
+            .div_ceil(transfer_bytes)
+            .max(1),
+    };
+    let source = LiveEvk4Source::new(
+        (!live.event_serial.is_empty()).then(|| live.event_serial.clone()),
+        settings,
+        stream,
+        Backoff {
+            first: Duration::from_millis(live.reconnect_ms),
+            max: Duration::from_millis(live.reconnect_max_ms),
+        },
+        Some(rec),
+        schedule,
+        (config.queue.batch_events, config.queue.batch_us),
+    )
+    .with_max_seconds(config.source.max_seconds);
+    Ok((Box::new(source), scene, schedule.timeline_config()))
 }
 
 /// Paths of the file outputs of a run.

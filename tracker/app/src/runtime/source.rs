@@ -62,6 +62,35 @@ pub struct SourceStats {
     pub anomalies: Vec<(String, u64)>,
     /// Whether the source stopped early on request.
     pub stopped: bool,
+    /// The USB side of a live camera (`None` for a replay).
+    pub usb: Option<UsbStats>,
+}
+
+/// What the USB side of a live camera did: the data path's counters and the camera's outages.
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
+pub struct UsbStats {
+    /// Times the camera was opened and streamed.
+    pub sessions: u64,
+    /// Times the camera went away while streaming (each followed by reopening).
+    pub outages: u64,
+    /// Failed attempts to open the camera (absent, busy, or not yet back).
+    pub open_attempts_failed: u64,
+    /// Event bytes received into the ring.
+    pub bytes: u64,
+    /// Transfers dropped because the ring was full (the decoder resynchronised after each run of them).
+    pub dropped_transfers: u64,
+    /// Bytes of the dropped transfers.
+    pub dropped_bytes: u64,
+    /// Transfers that failed (I/O error, stall).
+    pub transfer_errors: u64,
+    /// Gaps in the stream the decoder resynchronised after.
+    pub gaps: u64,
+    /// Memory of the ring between USB and the decoder, bytes.
+    pub ring_bytes: u64,
+    /// The most ring slots filled at once.
+    pub max_ring_filled: u64,
+    /// The latest problem with the camera, while it lasts.
+    pub last_error: Option<String>,
 }
 
 impl SourceStats {

@@ -188,6 +188,25 @@ impl std::fmt::Display for Summary {
                 self.poses_revised
             )?;
         }
+        if let Some(u) = &self.source_stats.usb {
+            writeln!(
+                f,
+                "usb:             {:.1} MB received in {} session(s), {} outage(s), {} failed open(s); {} transfers \
+                 dropped ({} bytes, ring of {} MiB full), {} transfer errors, {} gaps resynchronised",
+                u.bytes as f64 * 1e-6,
+                u.sessions,
+                u.outages,
+                u.open_attempts_failed,
+                u.dropped_transfers,
+                u.dropped_bytes,
+                u.ring_bytes / (1024 * 1024),
+                u.transfer_errors,
+                u.gaps
+            )?;
+            if let Some(e) = &u.last_error {
+                writeln!(f, "usb error:       {e}")?;
+            }
+        }
         if !self.source_stats.anomalies.is_empty() {
             let a: Vec<String> = self
                 .source_stats

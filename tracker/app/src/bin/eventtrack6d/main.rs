@@ -5,6 +5,7 @@ mod bench;
 mod convert;
 mod demo;
 mod demo_sequence;
+mod devices;
 mod evaluate;
 mod inspect;
 mod paths;
@@ -33,6 +34,7 @@ enum Command {
     Eval(evaluate::EvalArgs),
     Inspect(inspect::InspectArgs),
     Convert(convert::ConvertArgs),
+    Devices(devices::DevicesArgs),
     /// Print the command reference (docs/commands.md) as Markdown, from these commands' own help texts.
     #[command(hide = true)]
     Reference,
@@ -51,6 +53,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Inspect(args) => inspect::run(&args),
         Command::Convert(args) => convert::run(&args),
+        Command::Devices(args) => devices::run(&args),
         Command::Eval(args) => evaluate::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Run(args) => run::run(&args),

@@ -34,6 +34,10 @@ pub struct RunArgs {
     /// microseconds) to FILE; overrides `[output] latency_log`.
     #[arg(long, value_name = "FILE")]
     pub latency_log: Option<PathBuf>,
+    /// Stop after this many seconds of the source's stream (the camera's clock from its first event; a replay's
+    /// recording time), as if Ctrl-C came then; overrides `[source] max_seconds`.
+    #[arg(long, value_name = "S")]
+    pub seconds: Option<f64>,
 }
 
 /// Runs the command.
@@ -43,6 +47,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
         for note in config::unused_tables(&config, &text) {
             eprintln!("warning: {}: {note}", args.config.display());
         }
+    }
+    if let Some(s) = args.seconds {
+        if !(s.is_finite() && s > 0.0 && s <= 1e6) {
+            anyhow::bail!("--seconds {s}: must be a number of seconds in (0, 1000000]");
+        }
+        config.source.max_seconds = s;
     }
     if let Some(p) = &args.latency_log {
         config.output.latency_log = Some(session::from_working_dir(p)?);

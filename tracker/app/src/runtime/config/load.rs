@@ -75,6 +75,9 @@ pub fn resolve_paths(config: &mut Config, base: &Path) {
     }
     if let Some(l) = &mut config.live {
         join(&mut l.calibration);
+        if let Some(r) = &mut l.depth_recording {
+            join(r);
+        }
     }
     for o in &mut config.objects {
         join(&mut o.mesh);

@@ -163,6 +163,10 @@ pub struct SourceConfig {
     /// Wait this long after the sinks are up before the first event is read (lets subscribers connect), ms.
     #[serde(default)]
     pub start_delay_ms: u64,
+    /// End the run after this many seconds of the source's stream (the camera's clock from its first event; a
+    /// replay's recording time); 0 = until the source ends (or Ctrl-C). `run --seconds` sets it.
+    #[serde(default)]
+    pub max_seconds: f64,
     /// Replay only: deliver each depth frame this long after its exposure (stream time), as a live depth
     /// camera's transport does, ms; 0 = with the trigger pulse of its exposure. The tracker tracks the ticks
     /// since its exposure again when it arrives (`retrack_late_depth`, `max_depth_age_ms`).
@@ -210,24 +214,72 @@ pub struct ReplayConfig {
     pub recording: PathBuf,
 }
 
-/// `[live]`: the real rig. Documented in `config/rig-evk4-d435i.toml`; the drivers are not implemented yet.
+/// `[live]`: the real rig (`config/rig-evk4-d435i.toml`; the EVK4 set-up: docs/live-camera.md).
 #[derive(Debug, Clone, PartialEq, Deserialize, serde::Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LiveConfig {
     /// Event camera model (`evk4`).
     pub event_camera: String,
-    /// Serial number of the event camera; empty = the first one found.
+    /// Serial number of the event camera (as `eventtrack6d devices` prints it); empty = the first one found.
     #[serde(default)]
     pub event_serial: String,
     /// Trigger input channel carrying the MCU's pulse train.
     #[serde(default)]
     pub trigger_channel: u8,
-    /// Depth camera model (`d435i`).
+    /// Depth source: `d435i` (the live depth camera) or `recording` (the depth frames of `depth_recording`,
+    /// delivered on the live trigger timeline: the live event path on its own, for tests and bring-up).
     pub depth_camera: String,
-    /// V4L2 device of the depth camera's Z16 stream.
+    /// V4L2 device of the depth camera's Z16 stream (`depth_camera = "d435i"`).
+    #[serde(default)]
     pub depth_device: PathBuf,
-    /// Calibration of both cameras in `camera.json` format (intrinsics and `T_event_depth`).
+    /// Calibration of both cameras in `camera.json` format (intrinsics and `T_event_depth`; with
+    /// `depth_camera = "d435i"`).
+    #[serde(default)]
     pub calibration: PathBuf,
+    /// The recording whose depth frames, cameras and objects a `depth_camera = "recording"` run uses.
+    #[serde(default)]
+    pub depth_recording: Option<PathBuf>,
+    /// Bias offsets from the sensor's factory codes, e.g. `{ bias_diff_on = 20, bias_refr = -10 }`. Allowed:
+    /// bias_fo -35..=55, bias_hpf 0..=120, bias_diff_on -85..=140, bias_diff -25..=23, bias_diff_off -35..=190,
+    /// bias_refr -20..=235.
+    #[serde(default)]
+    pub biases: std::collections::BTreeMap<String, i64>,
+    /// The sensor's event-rate controller: cap the output near this many events per second (0 = no cap; at
+    /// least 5000).
+    #[serde(default)]
+    pub erc_events_per_second: f64,
+    /// Bulk transfers kept in flight on the data endpoint (1..=256).
+    #[serde(default = "default_usb_transfers")]
+    pub usb_transfers: usize,
+    /// Size of each transfer, KiB (4..=4096).
+    #[serde(default = "default_usb_transfer_kib")]
+    pub usb_transfer_kib: usize,
+    /// Memory of the ring between USB and the decoder, MiB (1..=4096): what a burst or a slow tracker may fill
+    /// before transfers are dropped (counted, and the decoder resynchronises).
+    #[serde(default = "default_ring_mib")]
+    pub ring_mib: usize,
+    /// First wait before reopening a camera that went away, ms (doubles per failed attempt).
+    #[serde(default = "default_reconnect_ms")]
+    pub reconnect_ms: u64,
+    /// Longest wait between reopening attempts, ms.
+    #[serde(default = "default_reconnect_max_ms")]
+    pub reconnect_max_ms: u64,
+}
+
+fn default_usb_transfers() -> usize {
+    32
+}
+fn default_usb_transfer_kib() -> usize {
+    128
+}
+fn default_ring_mib() -> usize {
+    32
+}
+fn default_reconnect_ms() -> u64 {
+    250
+}
+fn default_reconnect_max_ms() -> u64 {
+    4000
 }
 
 /// `[tracker]`.
@@ -359,6 +411,7 @@ pub const DEFAULT_CONFIG_TOML: &str = include_str!("../../../../../config/defaul
 mod load;
 mod reference;
 mod validate;
+pub mod validate_live;
 
 pub use load::{builtin_default, from_toml, load, resolve_paths, unused_tables};
 pub use reference::reference_markdown;

@@ -189,7 +189,7 @@ fn key_lookup() {
 }
 
 #[test]
-fn shipped_configurations_load_and_the_rig_says_live_is_not_there_yet() {
+fn shipped_configurations_load_and_the_rig_says_the_live_depth_camera_is_not_there_yet() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config");
     let demo = load(&root.join("default.toml")).unwrap();
     assert_eq!(demo.source.kind, SourceKind::Demo);
@@ -201,7 +201,10 @@ fn shipped_configurations_load_and_the_rig_says_live_is_not_there_yet() {
         .err()
         .unwrap()
         .to_string();
-    assert!(e.contains("live EVK4 source not implemented yet"), "{e}");
+    assert!(
+        e.contains("live D435i driver is not implemented yet"),
+        "{e}"
+    );
     let e = crate::runtime::setup::build_source(&demo)
         .err()
         .unwrap()

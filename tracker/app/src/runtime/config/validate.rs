@@ -86,15 +86,7 @@ pub fn validate(config: &Config, origin: &str) -> Result<(), ConfigError> {
                     format!("`{}` is not supported (supported: evk4)", live.event_camera),
                 ));
             }
-            if live.depth_camera != "d435i" {
-                return Err(bad(
-                    "live.depth_camera",
-                    format!(
-                        "`{}` is not supported (supported: d435i)",
-                        live.depth_camera
-                    ),
-                ));
-            }
+            super::validate_live::check_live(live, origin)?;
             if live.trigger_channel > 15 {
                 return Err(bad(
                     "live.trigger_channel",
@@ -104,7 +96,7 @@ pub fn validate(config: &Config, origin: &str) -> Result<(), ConfigError> {
                     ),
                 ));
             }
-            if config.objects.is_empty() {
+            if config.objects.is_empty() && live.depth_camera != "recording" {
                 return Err(bad(
                     "objects",
                     "a live rig needs at least one [[objects]] entry (name, mesh, first pose)"
@@ -112,6 +104,13 @@ pub fn validate(config: &Config, origin: &str) -> Result<(), ConfigError> {
                 ));
             }
         }
+    }
+    let max_s = config.source.max_seconds;
+    if !(max_s.is_finite() && (0.0..=1e6).contains(&max_s)) {
+        return Err(bad(
+            "source.max_seconds",
+            format!("{max_s} is out of range: 0 (until the source ends) to 1000000 seconds"),
+        ));
     }
     if config.source.start_delay_ms > 60_000 {
         return Err(bad(
@@ -265,12 +264,26 @@ pub fn check_files(config: &Config, origin: &str) -> Result<(), ConfigError> {
     }
     if config.source.kind == SourceKind::Live
         && let Some(l) = &config.live
+        && l.depth_camera == "d435i"
         && !l.calibration.is_file()
     {
         return Err(missing(
             "live.calibration".into(),
             "calibration file",
             &l.calibration,
+        ));
+    }
+    if config.source.kind == SourceKind::Live
+        && let Some(r) = config
+            .live
+            .as_ref()
+            .and_then(|l| l.depth_recording.as_ref())
+        && !r.is_dir()
+    {
+        return Err(missing(
+            "live.depth_recording".into(),
+            "recording directory",
+            r,
         ));
     }
     Ok(())
