@@ -44,21 +44,21 @@ pub fn work_dir() -> std::io::Result<tempfile::TempDir> {
     tempfile::Builder::new().prefix("test-").tempdir_in(base)
 }
 
-/// Runs `args` in the VM with the USB/IP host side loaded, giving up after `timeout_s`.
-pub fn run(timeout_s: u32, args: &[&str]) -> std::io::Result<Output> {
+/// Runs `args` in the VM with the USB/IP host side loaded and the `env` variables (`K=V`) set, giving up after
+/// `timeout_s`.
+pub fn run(timeout_s: u32, env: &[&str], args: &[&str]) -> std::io::Result<Output> {
     let root = repo_root();
-    Command::new("bash")
-        .arg(root.join("tests/vm/run.sh"))
-        .args([
-            "--timeout",
-            &timeout_s.to_string(),
-            "--modules",
-            "usbip-core,vhci-hcd",
-            "--",
-        ])
-        .args(args)
-        .current_dir(&root)
-        .output()
+    let mut command = Command::new("bash");
+    command.arg(root.join("tests/vm/run.sh")).args([
+        "--timeout",
+        &timeout_s.to_string(),
+        "--modules",
+        "usbip-core,vhci-hcd",
+    ]);
+    for e in env {
+        command.args(["--env", e]);
+    }
+    command.arg("--").args(args).current_dir(&root).output()
 }
 
 /// The text between `=== name ===` and the next `===` marker line (or the end) of a guest's output.

@@ -1,8 +1,10 @@
 //! The live EVK4 path through a real kernel's USB stack: an emulated camera (`hil-sim usb-camera`) served over
 //! USB/IP, attached by the guest kernel's `vhci-hcd` in a QEMU VM (tests/vm/), and `eventtrack6d run` with a live
-//! configuration reading it with rusb through usbfs, exactly as on a robot PC. Nothing is dropped on the way, so
-//! the live run publishes `eventtrack6d track`'s poses of the same recording, bit for bit. Skipped, with the
-//! reason printed, only where QEMU or the VM kernel is missing (`.ci/setup` installs both).
+//! configuration reading it with rusb through usbfs, exactly as on a robot PC: the poses of a run where nothing
+//! is dropped, an unplug and re-plug, a burst above what the ring holds, a register that fails. The binaries are
+//! the workspace's `target/debug` ones (`cargo test --workspace` builds them; `cargo build` first when running
+//! this file alone). Skipped, with the reason printed, only where QEMU or the VM kernel is missing (`.ci/setup`
+//! installs both).
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -10,29 +12,109 @@ use eventtrack6d_tests::vm;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::Mutex;
 
-/// Stream time the live run covers, seconds (the recording is 3 s; the run ends at its first event plus this).
-const LIVE_SECONDS: f64 = 2.9;
+/// One VM at a time: two TCG guests on two cores only slow each other down.
+static VM: Mutex<()> = Mutex::new(());
 
-/// Writes a live configuration reading the EVK4, with depth from `rec`, its poses to the guest's /tmp/live-out.
-fn live_config(dir: &Path, rec: &Path) -> std::path::PathBuf {
-    let path = dir.join("live.toml");
+/// A generated recording (the mug shaken slowly) of `seconds` in `dir`.
+fn recording(dir: &Path, seconds: f64) -> PathBuf {
+    let rec = dir.join("rec");
+    let cfg = GenerateConfig::new(
+        ObjectSource::Library(ObjectKind::Mug),
+        MotionProfile::Shake,
+        SpeedLevel::Slow,
+        seconds,
+        7,
+    );
+    generate(&cfg, &rec, |_| {}).unwrap();
+    rec
+}
+
+/// What a guest run printed.
+struct GuestRun {
+    ok: bool,
+    stdout: String,
+    stderr: String,
+}
+
+impl GuestRun {
+    fn poses(&self) -> Vec<&str> {
+        rows(vm::section(&self.stdout, "poses.csv").unwrap_or(""))
+    }
+    fn camera(&self) -> serde_json::Value {
+        serde_json::from_str(vm::section(&self.stdout, "camera.json").unwrap_or("null"))
+            .unwrap_or_default()
+    }
+    /// The number before `label` on the summary's `usb:` line.
+    fn usb(&self, label: &str) -> u64 {
+        let line = self
+            .stdout
+            .lines()
+            .find(|l| l.starts_with("usb:"))
+            .unwrap_or_else(|| panic!("{}", self.all()));
+        let at = line
+            .find(label)
+            .unwrap_or_else(|| panic!("no `{label}` in {line}"));
+        line[..at]
+            .split(|c: char| !c.is_ascii_digit())
+            .rfind(|w| !w.is_empty())
+            .unwrap()
+            .parse()
+            .unwrap()
+    }
+    fn all(&self) -> String {
+        format!("stdout:\n{}\nstderr:\n{}", self.stdout, self.stderr)
+    }
+}
+
+/// Runs the live tracker in the VM on the emulated camera streaming `rec`, for `seconds` of stream time, with
+/// `live_extra` added to the `[live]` table, the emulator's `camera_args` and the guest script's `env`.
+fn live_run(
+    dir: &Path,
+    rec: &Path,
+    seconds: f64,
+    live_extra: &str,
+    camera_args: &[&str],
+    env: &[&str],
+) -> GuestRun {
+    let config = dir.join("live.toml");
     let text = format!(
         "[source]\nkind = \"live\"\n[live]\nevent_camera = \"evk4\"\ndepth_camera = \"recording\"\n\
-         depth_recording = \"{}\"\nring_mib = 512\n[tracker]\ndefer_late_depth = false\n[output]\n\
-         dir = \"/tmp/live-out\"\n[sinks]\ncsv = true\nzenoh = false\n[can]\nenabled = false\n",
+         depth_recording = \"{}\"\nreconnect_ms = 100\n{live_extra}\n[tracker]\ndefer_late_depth = false\n\
+         [output]\ndir = \"/tmp/live-out\"\n[sinks]\ncsv = true\nzenoh = false\n[can]\nenabled = false\n",
         rec.display()
     );
-    std::fs::write(&path, text).unwrap();
-    path
+    std::fs::write(&config, text).unwrap();
+    let bin = vm::bin_dir();
+    let seconds = seconds.to_string();
+    let mut args: Vec<&str> = Vec::new();
+    args.extend([
+        "tests/vm/live-evk4.sh",
+        bin.to_str().unwrap(),
+        rec.to_str().unwrap(),
+    ]);
+    args.extend([config.to_str().unwrap(), seconds.as_str()]);
+    args.extend(camera_args);
+    let _one = VM.lock().unwrap_or_else(|p| p.into_inner());
+    let out = vm::run(600, env, &args).unwrap();
+    GuestRun {
+        ok: out.status.success(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
 }
 
 fn rows(csv: &str) -> Vec<&str> {
     csv.lines()
         .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
         .collect()
+}
+
+fn t_us(row: &str) -> i64 {
+    row.split(',').next().unwrap().parse().unwrap()
 }
 
 #[test]
@@ -42,18 +124,9 @@ fn a_live_run_through_the_kernel_usb_stack_publishes_the_offline_poses() {
         return;
     }
     let work = vm::work_dir().unwrap();
-    let rec = work.path().join("rec");
-    let cfg = GenerateConfig::new(
-        ObjectSource::Library(ObjectKind::Mug),
-        MotionProfile::Shake,
-        SpeedLevel::Slow,
-        3.0,
-        7,
-    );
-    generate(&cfg, &rec, |_| {}).unwrap();
-    let bin = vm::bin_dir();
+    let rec = recording(work.path(), 3.0);
     let offline_csv = work.path().join("offline.csv");
-    let offline = Command::new(bin.join("eventtrack6d"))
+    let offline = Command::new(vm::bin_dir().join("eventtrack6d"))
         .args([
             "track",
             rec.to_str().unwrap(),
@@ -67,52 +140,216 @@ fn a_live_run_through_the_kernel_usb_stack_publishes_the_offline_poses() {
         "{}",
         String::from_utf8_lossy(&offline.stderr)
     );
-    let config = live_config(work.path(), &rec);
-    let out = vm::run(
-        600,
-        &[
-            "tests/vm/live-evk4.sh",
-            bin.to_str().unwrap(),
-            rec.to_str().unwrap(),
-            config.to_str().unwrap(),
-            &LIVE_SECONDS.to_string(),
-            "--pace",
-            "fast",
-        ],
-    )
-    .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        out.status.success(),
-        "VM run failed ({:?}):\n{stdout}\n{stderr}",
-        out.status
+    let run = live_run(
+        work.path(),
+        &rec,
+        2.9,
+        "ring_mib = 512",
+        &["--pace", "fast"],
+        &[],
     );
+    assert!(run.ok, "{}", run.all());
     // The camera was found through the kernel, with the identity the emulator gave it.
     assert!(
-        stdout.contains("EVK4 04b4:00f5")
-            && stdout.contains("serial 00EE6D00")
-            && stdout.contains("usable: yes"),
-        "{stdout}"
+        run.stdout.contains("EVK4 04b4:00f5") && run.stdout.contains("serial 00EE6D00"),
+        "{}",
+        run.all()
     );
-    assert!(stdout.contains(" 0 transfers dropped"), "{stdout}");
-    let live = rows(vm::section(&stdout, "poses.csv").unwrap());
+    assert!(run.stdout.contains("usable: yes"), "{}", run.all());
+    assert_eq!(run.usb("transfers dropped"), 0, "{}", run.all());
+    let live = run.poses();
     let offline_text = std::fs::read_to_string(&offline_csv).unwrap();
     let offline = rows(&offline_text);
     // Every tick within the live run's stream time, to the bit.
-    let first_t: i64 = offline[0].split(',').next().unwrap().parse().unwrap();
     let within = offline
         .iter()
-        .filter(|r| r.split(',').next().unwrap().parse::<i64>().unwrap() < first_t + 2_800_000)
+        .filter(|r| t_us(r) < t_us(offline[0]) + 2_800_000)
         .count();
     assert!(
         live.len() >= within,
-        "{} live poses, {within} offline within 2.8 s:\n{stdout}\n{stderr}",
-        live.len()
+        "{} live poses, {within} offline within 2.8 s:\n{}",
+        live.len(),
+        run.all()
     );
     assert_eq!(
         live[..],
         offline[..live.len()],
         "the live run's poses differ from track's"
+    );
+}
+
+#[test]
+fn an_unplugged_camera_is_reported_reopened_and_tracked_again() {
+    if let Some(why) = vm::unavailable() {
+        eprintln!("skipped: the VM cannot run here: {why}");
+        return;
+    }
+    let work = vm::work_dir().unwrap();
+    let rec = recording(work.path(), 3.0);
+    let run = live_run(
+        work.path(),
+        &rec,
+        2.9,
+        "ring_mib = 512",
+        &["--pace", "fast", "--unplug-after", "0.5"],
+        &["REPLUG=1"],
+    );
+    assert!(run.ok, "{}", run.all());
+    // Reported at once: the stream time it happened at, and how long after the camera's last data.
+    let report = run
+        .stderr
+        .lines()
+        .find(|l| l.contains("was disconnected (stream time"))
+        .unwrap_or_else(|| panic!("no disconnect report:\n{}", run.all()));
+    let silent_ms: f64 = report
+        .split(", ")
+        .nth(1)
+        .and_then(|s| s.split(" ms").next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("{report}"));
+    assert!(
+        silent_ms <= 100.0,
+        "reported {silent_ms} ms after the last data: {report}"
+    );
+    assert_eq!(run.usb("outage(s)"), 1, "{}", run.all());
+    assert_eq!(run.usb("session(s)"), 2, "{}", run.all());
+    assert_eq!(run.camera()["unplugs"], 1, "{}", run.all());
+    // Tracking resumed on the camera's return: poses published from after the outage to the run's end.
+    let unplugged_at: f64 = report
+        .split("stream time ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let poses = run.poses();
+    let last = t_us(poses.last().unwrap()) as f64 * 1e-6;
+    assert!(
+        last > unplugged_at + 1.0,
+        "last pose at {last} s, unplugged at {unplugged_at} s:\n{}",
+        run.all()
+    );
+}
+
+#[test]
+fn a_burst_the_ring_cannot_hold_is_dropped_counted_and_resynchronised() {
+    if let Some(why) = vm::unavailable() {
+        eprintln!("skipped: the VM cannot run here: {why}");
+        return;
+    }
+    let work = vm::work_dir().unwrap();
+    let rec = recording(work.path(), 1.0);
+    let run = live_run(
+        work.path(),
+        &rec,
+        0.9,
+        "ring_mib = 1\nusb_transfer_kib = 64",
+        &[
+            "--pace",
+            "realtime",
+            "--burst-after",
+            "0.2",
+            "--burst-mib",
+            "16",
+        ],
+        &[],
+    );
+    assert!(run.ok, "{}", run.all());
+    let sent = run.camera()["camera"]["bytes_sent"].as_u64().unwrap();
+    let received = run.usb("bytes received");
+    let dropped = run.usb("transfers dropped (");
+    let dropped_bytes = run.usb(" bytes; ring");
+    assert!(dropped > 0 && dropped_bytes > 0, "{}", run.all());
+    assert_eq!(
+        sent,
+        received + dropped_bytes,
+        "every byte the camera sent is received or counted as dropped\n{}",
+        run.all()
+    );
+    assert!(run.usb("gaps resynchronised") >= 1, "{}", run.all());
+    assert!(!run.poses().is_empty(), "{}", run.all());
+}
+
+#[test]
+fn a_recorded_session_replays_to_the_offline_poses_of_what_the_camera_saw() {
+    if let Some(why) = vm::unavailable() {
+        eprintln!("skipped: the VM cannot run here: {why}");
+        return;
+    }
+    let work = vm::work_dir().unwrap();
+    let rec = recording(work.path(), 1.0);
+    let offline_csv = work.path().join("offline.csv");
+    let offline = Command::new(vm::bin_dir().join("eventtrack6d"))
+        .args([
+            "track",
+            rec.to_str().unwrap(),
+            "--out",
+            offline_csv.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        offline.status.success(),
+        "{}",
+        String::from_utf8_lossy(&offline.stderr)
+    );
+    let run = live_run(
+        work.path(),
+        &rec,
+        0.9,
+        "ring_mib = 256",
+        &["--pace", "fast"],
+        &["MODE=record"],
+    );
+    assert!(run.ok, "{}", run.all());
+    assert!(
+        run.stdout.contains("0 transfers dropped (0 bytes)"),
+        "{}",
+        run.all()
+    );
+    let recorded = run.poses();
+    let offline_text = std::fs::read_to_string(&offline_csv).unwrap();
+    let offline = rows(&offline_text);
+    assert!(
+        recorded.len() >= 100,
+        "{} poses from the recorded session:\n{}",
+        recorded.len(),
+        run.all()
+    );
+    assert_eq!(
+        recorded[..],
+        offline[..recorded.len()],
+        "the recorded session tracks differently"
+    );
+}
+
+#[test]
+fn a_failing_register_write_stops_the_run_naming_the_register() {
+    if let Some(why) = vm::unavailable() {
+        eprintln!("skipped: the VM cannot run here: {why}");
+        return;
+    }
+    let work = vm::work_dir().unwrap();
+    let rec = recording(work.path(), 0.3);
+    let run = live_run(
+        work.path(),
+        &rec,
+        0.2,
+        "",
+        &["--fail-register", "0x1014"],
+        &[],
+    );
+    assert!(!run.ok, "{}", run.all());
+    assert!(
+        run.stderr.contains("register 0x1014 (bias) = 0x11a1504d"),
+        "{}",
+        run.all()
+    );
+    assert!(
+        run.stderr.contains("refused property 0x40010102 (errno 5)"),
+        "{}",
+        run.all()
     );
 }

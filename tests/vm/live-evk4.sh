@@ -5,7 +5,9 @@
 #   live-evk4.sh BIN_DIR RECORDING CONFIG SECONDS [usb-camera options...]
 #
 # Prints `eventtrack6d devices`, the run's summary, then the pose CSV and the camera's statistics between
-# `=== poses.csv ===` / `=== camera.json ===` markers (the guest's files do not reach the host).
+# `=== poses.csv ===` / `=== camera.json ===` markers (the guest's files do not reach the host). With REPLUG=1 in
+# the environment, the camera is attached again after it unplugs (as a user plugs the cable back in). With
+# MODE=record, `eventtrack6d record` captures the session instead and `eventtrack6d track` tracks the recording.
 set -euo pipefail
 bin="$1" rec="$2" config="$3" seconds="$4"
 shift 4
@@ -24,10 +26,26 @@ for _ in $(seq 100); do
     sleep 0.1
 done
 "${bin}/eventtrack6d" devices
+if [ "${REPLUG:-0}" = 1 ]; then
+    (
+        while grep -qs 04b4 /sys/bus/usb/devices/*/idVendor; do sleep 0.05; done
+        echo "replug: the camera is gone; attaching it again in 0.5 s" >&2
+        sleep 0.5
+        python3 "${here}/attach.py" 127.0.0.1:3240 1-1 >/dev/null
+    ) &
+fi
 status=0
-"${bin}/eventtrack6d" run --config "${config}" --seconds "${seconds}" --no-accuracy || status=$?
-echo "=== poses.csv ==="
-cat /tmp/live-out/poses.csv 2>/dev/null || true
+if [ "${MODE:-run}" = record ]; then
+    # Record the session, then track the recording offline (inside the guest: its files stay here).
+    "${bin}/eventtrack6d" record --config "${config}" --out /tmp/recorded --seconds "${seconds}" || status=$?
+    [ "${status}" = 0 ] && { "${bin}/eventtrack6d" track /tmp/recorded --out /tmp/live-out.csv || status=$?; }
+    echo "=== poses.csv ==="
+    cat /tmp/live-out.csv 2>/dev/null || true
+else
+    "${bin}/eventtrack6d" run --config "${config}" --seconds "${seconds}" --no-accuracy || status=$?
+    echo "=== poses.csv ==="
+    cat /tmp/live-out/poses.csv 2>/dev/null || true
+fi
 echo "=== camera.json ==="
 sleep 0.2
 cat /tmp/camera.json 2>/dev/null || true

@@ -19,9 +19,9 @@ pub enum CameraError {
     #[error("USB is not usable on this machine: {0}")]
     NoUsb(rusb::Error),
     /// No supported camera (with that serial) is connected.
-    #[error("no EVK4 {wanted} is connected{found}")]
+    #[error("no EVK4{wanted} is connected{found}")]
     NotFound {
-        /// "with serial X" or empty.
+        /// " with serial X" or empty.
         wanted: String,
         /// The cameras that are connected, if any (", connected: ...").
         found: String,
@@ -76,6 +76,19 @@ pub enum CameraError {
 }
 
 impl CameraError {
+    /// Whether reopening later may succeed: the camera is absent, gone, busy or not yet accessible, as opposed to a
+    /// camera that refuses its configuration or is not supported (retrying cannot help).
+    pub fn is_transient(&self) -> bool {
+        match self {
+            CameraError::NotFound { .. }
+            | CameraError::Disconnected
+            | CameraError::Permission { .. }
+            | CameraError::Usb { .. } => true,
+            CameraError::Register { source, .. } => source.is_disconnect(),
+            _ => false,
+        }
+    }
+
     /// Whether the camera is gone (a reopen may bring it back), as opposed to a fault of the request.
     pub fn is_disconnect(&self) -> bool {
         match self {
@@ -230,7 +243,7 @@ impl Evk4 {
             return Err(e);
         }
         Err(CameraError::NotFound {
-            wanted: serial.map_or_else(String::new, |s| format!("with serial {s}")),
+            wanted: serial.map_or_else(String::new, |s| format!(" with serial {s}")),
             found: if seen.is_empty() {
                 String::new()
             } else {

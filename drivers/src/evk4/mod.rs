@@ -13,4 +13,6 @@ pub mod treuzell;
 #[cfg(feature = "usb")]
 pub mod camera;
 #[cfg(feature = "usb")]
+pub mod session;
+#[cfg(feature = "usb")]
 pub mod stream;

@@ -158,6 +158,8 @@ pub struct Playback {
     started: Option<Instant>,
     faults: StreamFaults,
     burst_done: bool,
+    /// The stream is released up to this byte regardless of pace (a burst).
+    burst_until: usize,
     words_sent: u64,
     /// Bytes sent to the host so far.
     pub bytes_sent: u64,
@@ -176,6 +178,7 @@ impl Playback {
             started: None,
             faults,
             burst_done: false,
+            burst_until: 0,
             words_sent: 0,
             bytes_sent: 0,
             triggers_removed: 0,
@@ -222,11 +225,10 @@ impl Playback {
             && playing >= at
         {
             self.burst_done = true;
-            n = self
-                .faults
-                .burst_bytes
-                .min(stream.len().saturating_sub(self.position))
-                & !1;
+            self.burst_until = (self.position + self.faults.burst_bytes).min(stream.len()) & !1;
+        }
+        if self.burst_until > self.position {
+            n = n.max((self.burst_until - self.position).min(max));
         }
         if n == 0 {
             return None;

@@ -8,9 +8,9 @@
 use super::assembly::StreamAssembler;
 use super::source::{Source, SourceError, SourceOutput, SourceStats, StopFlag, UsbStats};
 use drivers::event::EventBuffer;
-use drivers::evk4::camera::{Evk4, SensorSettings};
-use drivers::evk4::identity::DATA_IN;
-use drivers::evk4::stream::{DataStream, StreamConfig};
+use drivers::evk4::camera::SensorSettings;
+use drivers::evk4::session::StreamingCamera;
+use drivers::evk4::stream::StreamConfig;
 use drivers::formats::evt3::Evt3Decoder;
 use drivers::recording::{Recording, TriggerSchedule};
 use drivers::transfer_ring::TransferRing;
@@ -73,47 +73,26 @@ impl LiveEvk4Source {
     }
 }
 
-/// One open camera with its data stream running.
-struct Session {
-    camera: Evk4,
-    stream: DataStream,
-}
-
 impl LiveEvk4Source {
-    fn open(&self, context: &rusb::Context, ring: &Arc<TransferRing>) -> Result<Session, String> {
-        let camera = Evk4::open(context, self.serial.as_deref()).map_err(|e| e.to_string())?;
-        camera.bring_up(&self.settings).map_err(|e| e.to_string())?;
-        camera
-            .flush_data(Duration::from_millis(100))
-            .map_err(|e| e.to_string())?;
-        let stream = DataStream::start(camera.handle(), DATA_IN, self.stream, ring.clone())
-            .map_err(|e| format!("EVK4 {}: data stream: {e}", camera.serial))?;
-        camera.start().map_err(|e| e.to_string())?;
-        eprintln!(
-            "live: EVK4 {} (firmware {}, {}, {}) streaming",
-            camera.serial,
-            drivers::evk4::identity::release_string(camera.release),
-            camera.sensor,
-            camera.speed
-        );
-        Ok(Session { camera, stream })
-    }
-
     /// Opens the camera, retrying with backoff until it opens or the run stops. A fault of the camera's
     /// configuration (a refused register, an unsupported device) ends the run at once.
     fn open_until_stopped(
         &self,
-        context: &rusb::Context,
         ring: &Arc<TransferRing>,
         stop: &StopFlag,
         usb: &mut UsbStats,
-    ) -> Result<Option<Session>, SourceError> {
+    ) -> Result<Option<StreamingCamera>, SourceError> {
         let mut wait = self.backoff.first;
         loop {
-            match self.open(context, ring) {
-                Ok(s) => return Ok(Some(s)),
-                Err(e) if is_fatal(&e) => return Err(SourceError::Input(e)),
+            match StreamingCamera::start(self.serial.as_deref(), &self.settings, self.stream, ring)
+            {
+                Ok(s) => {
+                    eprintln!("live: {} streaming", s.describe());
+                    return Ok(Some(s));
+                }
+                Err(e) if !e.is_transient() => return Err(SourceError::Input(e.to_string())),
                 Err(e) => {
+                    let e = e.to_string();
                     if usb.last_error.as_deref() != Some(e.as_str()) {
                         eprintln!("live: {e}; retrying every {} ms", wait.as_millis());
                         usb.last_error = Some(e);
@@ -133,14 +112,6 @@ impl LiveEvk4Source {
     }
 }
 
-/// Whether an open error is the camera's or the configuration's fault (no use retrying).
-fn is_fatal(message: &str) -> bool {
-    message.contains("register")
-        || message.contains("not supported")
-        || message.contains("firmware")
-        || message.contains("bias")
-}
-
 impl Source for LiveEvk4Source {
     fn describe(&self) -> String {
         format!(
@@ -154,8 +125,6 @@ impl Source for LiveEvk4Source {
     }
 
     fn run(&mut self, out: &SourceOutput, stop: &StopFlag) -> Result<SourceStats, SourceError> {
-        let context = rusb::Context::new()
-            .map_err(|e| SourceError::Input(format!("USB is not usable on this machine: {e}")))?;
         let ring = Arc::new(TransferRing::new(
             self.stream.ring_slots,
             self.stream.transfer_bytes,
@@ -178,11 +147,12 @@ impl Source for LiveEvk4Source {
         };
         let mut stopped = false;
         'sessions: while !stop.is_set() {
-            let Some(session) = self.open_until_stopped(&context, &ring, stop, &mut usb)? else {
+            let Some(session) = self.open_until_stopped(&ring, stop, &mut usb)? else {
                 break;
             };
             usb.sessions += 1;
             usb.last_error = None;
+            let mut last_data = Instant::now();
             loop {
                 if stop.is_set() || assembler.reached_end() {
                     let _ = session.camera.stop();
@@ -195,6 +165,7 @@ impl Source for LiveEvk4Source {
                     }
                     continue;
                 };
+                last_data = Instant::now();
                 if c.after_gap {
                     decoder.resynchronise();
                     usb.gaps += 1;
@@ -213,10 +184,16 @@ impl Source for LiveEvk4Source {
             }
             let counters = session.stream.counters();
             usb.transfer_errors += counters.transfer_errors;
-            drop(session);
             usb.outages += 1;
-            usb.last_error = Some("the EVK4 was disconnected".into());
-            eprintln!("live: the EVK4 was disconnected; reopening");
+            let silent_ms = last_data.elapsed().as_secs_f64() * 1e3;
+            let message = format!(
+                "the EVK4 {} was disconnected (stream time {:.3} s, {silent_ms:.0} ms after its last data)",
+                session.camera.serial,
+                decoder.current_time_us() as f64 * 1e-6
+            );
+            drop(session);
+            eprintln!("live: {message}; reopening");
+            usb.last_error = Some(message);
             decoder.resynchronise();
         }
         let mut stats = assembler.finish();

@@ -19,6 +19,7 @@ pub mod latency_log;
 pub mod live;
 mod priority;
 pub mod queue;
+pub mod recorder;
 pub mod replay;
 mod revision;
 pub mod setup;

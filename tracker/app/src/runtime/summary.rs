@@ -191,9 +191,9 @@ impl std::fmt::Display for Summary {
         if let Some(u) = &self.source_stats.usb {
             writeln!(
                 f,
-                "usb:             {:.1} MB received in {} session(s), {} outage(s), {} failed open(s); {} transfers \
-                 dropped ({} bytes, ring of {} MiB full), {} transfer errors, {} gaps resynchronised",
-                u.bytes as f64 * 1e-6,
+                "usb:             {} bytes received in {} session(s), {} outage(s), {} failed open(s); {} transfers \
+                 dropped ({} bytes; ring {} MiB), {} transfer errors, {} gaps resynchronised",
+                u.bytes,
                 u.sessions,
                 u.outages,
                 u.open_attempts_failed,

@@ -10,6 +10,7 @@ mod evaluate;
 mod inspect;
 mod paths;
 mod progress;
+mod record;
 mod run;
 mod session;
 mod track;
@@ -35,6 +36,7 @@ enum Command {
     Inspect(inspect::InspectArgs),
     Convert(convert::ConvertArgs),
     Devices(devices::DevicesArgs),
+    Record(record::RecordArgs),
     /// Print the command reference (docs/commands.md) as Markdown, from these commands' own help texts.
     #[command(hide = true)]
     Reference,
@@ -54,6 +56,7 @@ fn main() -> ExitCode {
         Command::Inspect(args) => inspect::run(&args),
         Command::Convert(args) => convert::run(&args),
         Command::Devices(args) => devices::run(&args),
+        Command::Record(args) => record::run(&args),
         Command::Eval(args) => evaluate::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Run(args) => run::run(&args),
