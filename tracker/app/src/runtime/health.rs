@@ -210,6 +210,8 @@ pub struct Health {
     pub poses_revised: u64,
     /// The hardware the tracker renders on ([`scene::render::RenderDevice`] as text); `None` if it renders nothing.
     pub renderer: Option<String>,
+    /// The live event camera's state, for a live source (`None` for a replay).
+    pub event_camera: Option<CameraHealth>,
     /// How old each depth frame was when it reached the tracker thread: the latest event or edge time handed over
     /// by then less the frame's exposure, on the event camera's clock (a live depth camera's transport latency).
     pub depth_frame_age: LatencyHistogram,
@@ -228,6 +230,23 @@ pub struct Health {
     /// Late depth frames handed over to be carried only, because the tracker thread had fallen behind
     /// ([`super::depth_arrival::DepthArrival::should_shed`]).
     pub depth_frames_shed: u64,
+}
+
+/// The live event camera as the status reports it.
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
+pub struct CameraHealth {
+    /// `opening` (not found yet, or coming back after an outage), `streaming` or `disconnected`.
+    pub state: &'static str,
+    /// The camera ("EVK4 serial (firmware, sensor, speed)"), once opened.
+    pub camera: Option<String>,
+    /// The latest problem, while it lasts (why it cannot be opened, or that it was disconnected).
+    pub error: Option<String>,
+    /// Times it went away while streaming.
+    pub outages: u64,
+    /// Transfers dropped because the ring between USB and the decoder was full.
+    pub dropped_transfers: u64,
+    /// Bytes of those transfers.
+    pub dropped_bytes: u64,
 }
 
 impl Health {
@@ -265,6 +284,7 @@ impl Health {
             events: 0,
             tracker: None,
             renderer: None,
+            event_camera: None,
             poses_revised: 0,
             depth_frame_age: LatencyHistogram::new(),
             depth_arrival: LatencyHistogram::new(),
@@ -363,6 +383,7 @@ impl Health {
             "sinks": sinks,
             "tracker": self.tracker,
             "renderer": self.renderer,
+            "event_camera": self.event_camera,
         })
     }
 }
@@ -420,5 +441,24 @@ mod tests {
         assert_eq!(j["tracker"]["redetections"], 2);
         assert_eq!(j["tracker"]["redetect_places_checked"], 5);
         assert_eq!(j["tracker"]["redetect_places_dropped"], 3);
+    }
+
+    #[test]
+    fn a_disconnected_camera_is_in_the_status_document() {
+        let mut h = Health::new(&["mug".into()], &[]);
+        assert!(h.status_json("running")["event_camera"].is_null());
+        h.event_camera = Some(CameraHealth {
+            state: "disconnected",
+            camera: None,
+            error: Some("the EVK4 00EE6D00 was disconnected".into()),
+            outages: 1,
+            dropped_transfers: 3,
+            dropped_bytes: 393_216,
+        });
+        let doc = h.status_json("running");
+        assert_eq!(doc["event_camera"]["state"], "disconnected");
+        assert_eq!(doc["event_camera"]["outages"], 1);
+        assert_eq!(doc["event_camera"]["dropped_bytes"], 393_216);
+        assert!(doc["event_camera"]["error"].as_str().unwrap_or("").contains("disconnected"));
     }
 }

@@ -6,6 +6,7 @@
 //! (with backoff) until the run stops; each outage is counted.
 
 use super::assembly::StreamAssembler;
+use super::health::CameraHealth;
 use super::source::{Source, SourceError, SourceOutput, SourceStats, StopFlag, UsbStats};
 use drivers::event::EventBuffer;
 use drivers::evk4::camera::SensorSettings;
@@ -79,6 +80,7 @@ impl LiveEvk4Source {
     fn open_until_stopped(
         &self,
         ring: &Arc<TransferRing>,
+        out: &SourceOutput,
         stop: &StopFlag,
         usb: &mut UsbStats,
     ) -> Result<Option<StreamingCamera>, SourceError> {
@@ -88,6 +90,8 @@ impl LiveEvk4Source {
             {
                 Ok(s) => {
                     eprintln!("live: {} streaming", s.describe());
+                    usb.last_error = None;
+                    report(out, "streaming", Some(s.describe()), usb, ring);
                     return Ok(Some(s));
                 }
                 Err(e) if !e.is_transient() => return Err(SourceError::Input(e.to_string())),
@@ -98,6 +102,7 @@ impl LiveEvk4Source {
                         usb.last_error = Some(e);
                     }
                     usb.open_attempts_failed += 1;
+                    report(out, "opening", None, usb, ring);
                 }
             }
             let until = Instant::now() + wait;
@@ -110,6 +115,25 @@ impl LiveEvk4Source {
             wait = (wait * 2).min(self.backoff.max);
         }
     }
+}
+
+/// Reports the camera's state and the data path's drop counters to the status.
+fn report(
+    out: &SourceOutput,
+    state: &'static str,
+    camera: Option<String>,
+    usb: &UsbStats,
+    ring: &TransferRing,
+) {
+    let c = ring.counters();
+    out.camera_health(CameraHealth {
+        state,
+        camera,
+        error: usb.last_error.clone(),
+        outages: usb.outages,
+        dropped_transfers: c.dropped_chunks,
+        dropped_bytes: c.dropped_bytes,
+    });
 }
 
 impl Source for LiveEvk4Source {
@@ -147,12 +171,11 @@ impl Source for LiveEvk4Source {
         };
         let mut stopped = false;
         'sessions: while !stop.is_set() {
-            let Some(session) = self.open_until_stopped(&ring, stop, &mut usb)? else {
+            let Some(session) = self.open_until_stopped(&ring, out, stop, &mut usb)? else {
                 break;
             };
             usb.sessions += 1;
-            usb.last_error = None;
-            let mut last_data = Instant::now();
+            let (mut last_data, mut last_report) = (Instant::now(), Instant::now());
             loop {
                 if stop.is_set() || assembler.reached_end() {
                     let _ = session.camera.stop();
@@ -166,6 +189,10 @@ impl Source for LiveEvk4Source {
                     continue;
                 };
                 last_data = Instant::now();
+                if last_data.duration_since(last_report) >= Duration::from_secs(1) {
+                    last_report = last_data;
+                    report(out, "streaming", Some(session.describe()), &usb, &ring);
+                }
                 if c.after_gap {
                     decoder.resynchronise();
                     usb.gaps += 1;
@@ -194,6 +221,7 @@ impl Source for LiveEvk4Source {
             drop(session);
             eprintln!("live: {message}; reopening");
             usb.last_error = Some(message);
+            report(out, "disconnected", None, &usb, &ring);
             decoder.resynchronise();
         }
         let mut stats = assembler.finish();

@@ -272,7 +272,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
 
     // The source, on a blocking thread; its end (or failure) ends the run.
     let started = Instant::now();
-    let out = SourceOutput::new(queue.clone(), wait_for_room);
+    let out = SourceOutput::new(queue.clone(), wait_for_room).with_health(health.clone());
     let source_stop = stop.clone();
     let source_result = tokio::task::spawn_blocking(move || source.run(&out, &source_stop)).await;
     queue.push(Ingest::End);

@@ -7,12 +7,13 @@
 //! [`SourceOutput`]. It runs on a blocking thread of the runtime and returns when its stream ends or when
 //! [`StopFlag::is_set`] says so.
 
+use super::health::{CameraHealth, Health};
 use super::queue::{Ingest, IngestQueue};
 use drivers::anomaly::DecodeAnomalies;
 use drivers::event::{CdEvent, TriggerEdge};
 use drivers::recording::DepthFrame;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 /// A shared stop request (Ctrl-C, the caller, or the end of the run).
@@ -110,6 +111,8 @@ pub struct SourceOutput {
     queue: Arc<IngestQueue>,
     /// Wait for room instead of dropping (fast replay); real-time sources never wait.
     wait_for_room: bool,
+    /// Where a live source reports its device's state (the status topic and the progress line read it).
+    health: Option<Arc<Mutex<Health>>>,
 }
 
 impl SourceOutput {
@@ -118,6 +121,20 @@ impl SourceOutput {
         Self {
             queue,
             wait_for_room,
+            health: None,
+        }
+    }
+
+    /// The same output, reporting a live source's device state into `health`.
+    pub fn with_health(mut self, health: Arc<Mutex<Health>>) -> Self {
+        self.health = Some(health);
+        self
+    }
+
+    /// Reports the live event camera's state (for the status topic).
+    pub fn camera_health(&self, camera: CameraHealth) {
+        if let Some(h) = &self.health {
+            h.lock().unwrap_or_else(|p| p.into_inner()).event_camera = Some(camera);
         }
     }
 
