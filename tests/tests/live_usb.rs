@@ -326,6 +326,76 @@ fn a_recorded_session_replays_to_the_offline_poses_of_what_the_camera_saw() {
 }
 
 #[test]
+fn a_stalled_camera_delays_the_stream_but_changes_no_pose() {
+    if let Some(why) = vm::unavailable() {
+        eprintln!("skipped: the VM cannot run here: {why}");
+        return;
+    }
+    let work = vm::work_dir().unwrap();
+    let rec = recording(work.path(), 1.0);
+    let offline_csv = work.path().join("offline.csv");
+    let offline = Command::new(vm::bin_dir().join("eventtrack6d"))
+        .args([
+            "track",
+            rec.to_str().unwrap(),
+            "--out",
+            offline_csv.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        offline.status.success(),
+        "{}",
+        String::from_utf8_lossy(&offline.stderr)
+    );
+    let camera = [
+        "--pace",
+        "fast",
+        "--stall-after",
+        "0.3",
+        "--stall-ms",
+        "400",
+    ];
+    let run = live_run(work.path(), &rec, 0.9, "ring_mib = 256", &camera, &[]);
+    assert!(run.ok, "{}", run.all());
+    // The bulk-IN requests waited 400 ms with no data: not an outage, nothing dropped, the same poses.
+    assert_eq!(run.usb("outage(s)"), 0, "{}", run.all());
+    assert_eq!(run.usb("transfers dropped"), 0, "{}", run.all());
+    let live = run.poses();
+    let offline_text = std::fs::read_to_string(&offline_csv).unwrap();
+    let offline = rows(&offline_text);
+    assert!(live.len() >= 100, "{}", run.all());
+    assert_eq!(live[..], offline[..live.len()], "a stall changed the poses");
+}
+
+#[test]
+fn malformed_words_from_the_camera_are_skipped_and_counted() {
+    if let Some(why) = vm::unavailable() {
+        eprintln!("skipped: the VM cannot run here: {why}");
+        return;
+    }
+    let work = vm::work_dir().unwrap();
+    let rec = recording(work.path(), 0.5);
+    let camera = ["--pace", "fast", "--malformed-every", "5000"];
+    let run = live_run(work.path(), &rec, 0.4, "ring_mib = 256", &camera, &[]);
+    assert!(run.ok, "{}", run.all());
+    let skipped: u64 = run
+        .stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("decode anomalies: unknown_type "))
+        .and_then(|n| n.split(',').next()?.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no decode anomalies line:\n{}", run.all()));
+    let injected = run.camera()["camera"]["malformed_sent"].as_u64().unwrap();
+    // Every malformed word the decoder saw is counted; the ones still on the way when the run ended are not.
+    assert!(
+        skipped > 0 && skipped <= injected,
+        "{skipped} skipped of {injected} injected\n{}",
+        run.all()
+    );
+    assert!(run.poses().len() >= 40, "{}", run.all());
+}
+
+#[test]
 fn a_failing_register_write_stops_the_run_naming_the_register() {
     if let Some(why) = vm::unavailable() {
         eprintln!("skipped: the VM cannot run here: {why}");

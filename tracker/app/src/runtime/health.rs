@@ -459,6 +459,11 @@ mod tests {
         assert_eq!(doc["event_camera"]["state"], "disconnected");
         assert_eq!(doc["event_camera"]["outages"], 1);
         assert_eq!(doc["event_camera"]["dropped_bytes"], 393_216);
-        assert!(doc["event_camera"]["error"].as_str().unwrap_or("").contains("disconnected"));
+        assert!(
+            doc["event_camera"]["error"]
+                .as_str()
+                .unwrap_or("")
+                .contains("disconnected")
+        );
     }
 }

@@ -44,6 +44,8 @@ pub struct RecordStats {
     pub gaps: u64,
     /// Times the camera went away and was reopened.
     pub outages: u64,
+    /// Wall-clock seconds from the camera's start to the end of the recording.
+    pub wall_s: f64,
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> RuntimeError + '_ {
@@ -157,6 +159,7 @@ pub fn record(
     let mut decoder = Evt3Decoder::new(Some(Geometry::new(1280, 720)));
     let mut counter = EventCounter::new();
     let (mut first_us, mut last_report) = (None, Instant::now());
+    let started = Instant::now();
     let limit_us = seconds.map(|s| (s * 1e6) as i64);
     loop {
         if stop.is_set() {
@@ -185,6 +188,7 @@ pub fn record(
         stats.stream_s = (now_us - first) as f64 * 1e-6;
         if last_report.elapsed() >= Duration::from_secs(1) {
             last_report = Instant::now();
+            stats.wall_s = started.elapsed().as_secs_f64();
             stats.events = counter.positive + counter.negative;
             progress(&stats);
         }
@@ -192,6 +196,7 @@ pub fn record(
             break;
         }
     }
+    stats.wall_s = started.elapsed().as_secs_f64();
     let _ = session.camera.stop();
     drop(session);
     file.flush().map_err(io(&events_path))?;

@@ -89,6 +89,14 @@ pub fn run(args: &RecordArgs) -> Result<()> {
     eprintln!();
     println!("recorded {} from {}", args.out.display(), stats.camera);
     println!("{}", line(&stats));
+    let wall = stats.wall_s.max(1e-9);
+    println!(
+        "throughput: {:.1} MB/s, {:.2} Mev/s over {:.2} s of wall clock ({:.2} s of stream)",
+        stats.bytes as f64 * 1e-6 / wall,
+        stats.events as f64 * 1e-6 / wall,
+        stats.wall_s,
+        stats.stream_s
+    );
     if stats.dropped_transfers > 0 {
         println!(
             "warning: {} transfers ({} bytes) were dropped: the disk or the machine could not keep up ([live] ring_mib)",
