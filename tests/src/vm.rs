@@ -36,8 +36,8 @@ pub fn unavailable() -> Option<String> {
     None
 }
 
-/// A directory for a VM test's files: under `target/vm/work` (the guest sees the host's files there, not the
-/// host's /tmp), removed when dropped.
+/// A directory for a VM test's files, under `target/vm/work` (next to the build the guest runs), removed when
+/// dropped.
 pub fn work_dir() -> std::io::Result<tempfile::TempDir> {
     let base = repo_root().join("target/vm/work");
     std::fs::create_dir_all(&base)?;

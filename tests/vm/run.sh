@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Run a command inside the test VM (tests/vm/README.md): Debian's stock amd64 kernel under QEMU
-# (TCG), the host's root filesystem as the guest's root (read-only 9p under a RAM overlay), fresh
-# /tmp, usbip-core + vhci-hcd loaded.
+# (TCG), the host's root filesystem as the guest's root (read-only 9p under a RAM overlay: the guest
+# sees every host file and its writes stay in its memory), usbip-core + vhci-hcd loaded.
 #
 #   tests/vm/run.sh [options] -- CMD [ARGS...]
 #
@@ -17,8 +17,7 @@
 #   --console          show the guest kernel's console on stderr (default: kept in a temp file,
 #                      printed when the VM dies without an exit status)
 #
-# CMD runs as root in the guest, in this directory when it exists there (it does unless it is
-# under /tmp, which the guest replaces), with PATH as here, HOME=/root, TERM=dumb and the
+# CMD runs as root in the guest, in this directory, with PATH as here, HOME=/root, TERM=dumb and the
 # --env/--pass-env variables (RUST_BACKTRACE and RUST_LOG are passed when set). Its stdout and
 # stderr come out on this script's stdout and stderr; the script exits with CMD's status, 124 on
 # timeout, 125 when the VM failed before reporting a status.
@@ -63,7 +62,7 @@ kdir="$(cd "${kroot}/lib/modules/${kver}" && pwd -P)"
 kernel="${vm_dir}/vmlinux"
 [ -f "${kernel}" ] || kernel="${kroot}/boot/vmlinuz-${kver}"
 
-# The job script lives on the host's filesystem, outside /tmp (the guest mounts its own /tmp).
+# The job script lives on the host's filesystem, under target/vm/jobs.
 mkdir -p "${vm_dir}/jobs"
 work="$(mktemp -d "${vm_dir}/jobs/job.XXXXXX")"
 qemu_pid= cat_out= cat_err= cat_con=
