@@ -11,8 +11,8 @@ use std::path::PathBuf;
 
 /// Run the real-time pipeline of a configuration file: source -> trigger timeline -> tracker thread -> sinks.
 ///
-/// The source is a demo sequence, a recording replay or the live rig (`[source] kind`; the live EVK4 and D435i
-/// sources are not implemented yet and say so). Trigger edges become 120 Hz ticks; the tracker runs on its own
+/// The source is a demo sequence, a recording replay or the live rig (`[source] kind`; the live rig reads the EVK4
+/// over USB, with a recording's depth frames until the live D435i driver exists: docs/live-camera.md). Trigger edges become 120 Hz ticks; the tracker runs on its own
 /// thread fed by a bounded queue (on overload the oldest event batch is dropped and counted; trigger edges and
 /// depth frames are never dropped) and hands every tick's poses to each sink: pose CSV, zenoh / ROS 2, CAN. It runs
 /// until the source ends or Ctrl-C, then prints the same summary as `demo`, followed, for a source with ground
