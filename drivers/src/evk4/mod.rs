@@ -13,6 +13,10 @@ pub mod treuzell;
 #[cfg(feature = "usb")]
 pub mod camera;
 #[cfg(feature = "usb")]
+pub mod discovery;
+#[cfg(feature = "usb")]
+pub mod error;
+#[cfg(feature = "usb")]
 pub mod session;
 #[cfg(feature = "usb")]
 pub mod stream;

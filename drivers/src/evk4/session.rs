@@ -1,7 +1,8 @@
 //! An EVK4 streaming: opened, brought up, its stale data flushed, its data endpoint running into a ring, and
 //! the sensor started. The unit the live source and the recorder open, lose and reopen.
 
-use super::camera::{CameraError, Evk4, SensorSettings};
+use super::camera::{Evk4, SensorSettings};
+use super::error::CameraError;
 use super::identity::DATA_IN;
 use super::stream::{DataStream, StreamConfig};
 use crate::transfer_ring::TransferRing;

@@ -14,7 +14,7 @@ use drivers::evk4::session::StreamingCamera;
 use drivers::evk4::stream::StreamConfig;
 use drivers::formats::evt3::Evt3Decoder;
 use drivers::recording::{Recording, TriggerSchedule};
-use drivers::transfer_ring::TransferRing;
+use drivers::transfer_ring::{Chunk, TransferRing};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use tracker::track::DepthTransport;
@@ -153,7 +153,7 @@ impl Source for LiveEvk4Source {
             self.stream.ring_slots,
             self.stream.transfer_bytes,
         ));
-        let mut assembler = StreamAssembler::new(
+        let assembler = StreamAssembler::new(
             out,
             self.depth.as_ref(),
             self.schedule,
@@ -163,76 +163,137 @@ impl Source for LiveEvk4Source {
             stop,
         )
         .with_max_seconds(self.max_seconds);
-        let mut decoder = Evt3Decoder::new(Some(drivers::event::Geometry::new(1280, 720)));
-        let mut chunk = EventBuffer::new();
-        let mut usb = UsbStats {
-            ring_bytes: ring.memory_bytes() as u64,
-            ..UsbStats::default()
+        let mut reader = Reader {
+            usb: UsbStats {
+                ring_bytes: ring.memory_bytes() as u64,
+                ..UsbStats::default()
+            },
+            ring,
+            assembler,
+            decoder: Evt3Decoder::new(Some(drivers::event::Geometry::new(1280, 720))),
+            chunk: EventBuffer::new(),
+            out,
         };
         let mut stopped = false;
-        'sessions: while !stop.is_set() {
-            let Some(session) = self.open_until_stopped(&ring, out, stop, &mut usb)? else {
+        while !stop.is_set() {
+            let Some(session) =
+                self.open_until_stopped(&reader.ring, out, stop, &mut reader.usb)?
+            else {
                 break;
             };
-            usb.sessions += 1;
-            let (mut last_data, mut last_report) = (Instant::now(), Instant::now());
-            loop {
-                if stop.is_set() || assembler.reached_end() {
+            reader.usb.sessions += 1;
+            match reader.stream(&session, stop) {
+                SessionEnd::Ended { by_request } => {
                     let _ = session.camera.stop();
-                    stopped = stop.is_set();
-                    break 'sessions;
+                    stopped = by_request;
+                    break;
                 }
-                let Some(c) = ring.pop(POLL) else {
-                    if session.stream.is_disconnected() {
-                        break;
-                    }
-                    continue;
-                };
-                last_data = Instant::now();
-                if last_data.duration_since(last_report) >= Duration::from_secs(1) {
-                    last_report = last_data;
-                    report(out, "streaming", Some(session.describe()), &usb, &ring);
-                }
-                if c.after_gap {
-                    decoder.resynchronise();
-                    usb.gaps += 1;
-                }
-                chunk.clear();
-                decoder.decode(&c.bytes, &mut chunk);
-                ring.recycle(c);
-                assembler.feed(&chunk, stop);
+                SessionEnd::Disconnected { last_data } => reader.outage(session, last_data),
             }
-            // Unplugged: what is still in the ring goes out, then the camera is reopened.
-            while let Some(c) = ring.pop(Duration::ZERO) {
-                chunk.clear();
-                decoder.decode(&c.bytes, &mut chunk);
-                ring.recycle(c);
-                assembler.feed(&chunk, stop);
-            }
-            let counters = session.stream.counters();
-            usb.transfer_errors += counters.transfer_errors;
-            usb.outages += 1;
-            let silent_ms = last_data.elapsed().as_secs_f64() * 1e3;
-            let message = format!(
-                "the EVK4 {} was disconnected (stream time {:.3} s, {silent_ms:.0} ms after its last data)",
-                session.camera.serial,
-                decoder.current_time_us() as f64 * 1e-6
-            );
-            drop(session);
-            eprintln!("live: {message}; reopening");
-            usb.last_error = Some(message);
-            report(out, "disconnected", None, &usb, &ring);
-            decoder.resynchronise();
         }
-        let mut stats = assembler.finish();
+        Ok(reader.finish(stopped))
+    }
+}
+
+/// How a camera's session ended.
+enum SessionEnd {
+    /// The run ends: on request (`by_request`) or at the end of its stream time.
+    Ended {
+        /// Whether a stop was requested.
+        by_request: bool,
+    },
+    /// The camera went away; its last data came at `last_data`.
+    Disconnected {
+        /// When the last chunk arrived.
+        last_data: Instant,
+    },
+}
+
+/// The reading side of a live run: the ring, the decoder and the assembler, with the USB counters.
+struct Reader<'a> {
+    ring: Arc<TransferRing>,
+    assembler: StreamAssembler<'a>,
+    decoder: Evt3Decoder,
+    chunk: EventBuffer,
+    usb: UsbStats,
+    out: &'a SourceOutput,
+}
+
+impl Reader<'_> {
+    /// Decodes one chunk (resynchronising after a gap) and delivers it.
+    fn deliver(&mut self, c: Chunk, stop: &StopFlag) {
+        if c.after_gap {
+            self.decoder.resynchronise();
+            self.usb.gaps += 1;
+        }
+        self.chunk.clear();
+        self.decoder.decode(&c.bytes, &mut self.chunk);
+        self.ring.recycle(c);
+        self.assembler.feed(&self.chunk, stop);
+    }
+
+    /// Reads `session`'s data until the run ends or the camera goes away.
+    fn stream(&mut self, session: &StreamingCamera, stop: &StopFlag) -> SessionEnd {
+        let (mut last_data, mut last_report) = (Instant::now(), Instant::now());
+        loop {
+            if stop.is_set() || self.assembler.reached_end() {
+                return SessionEnd::Ended {
+                    by_request: stop.is_set(),
+                };
+            }
+            let Some(c) = self.ring.pop(POLL) else {
+                if session.stream.is_disconnected() {
+                    return SessionEnd::Disconnected { last_data };
+                }
+                continue;
+            };
+            last_data = Instant::now();
+            if last_data.duration_since(last_report) >= Duration::from_secs(1) {
+                last_report = last_data;
+                report(
+                    self.out,
+                    "streaming",
+                    Some(session.describe()),
+                    &self.usb,
+                    &self.ring,
+                );
+            }
+            self.deliver(c, stop);
+        }
+    }
+
+    /// After an unplug: what is still in the ring goes out, the outage is counted and reported.
+    fn outage(&mut self, session: StreamingCamera, last_data: Instant) {
+        let never = StopFlag::new();
+        while let Some(c) = self.ring.pop(Duration::ZERO) {
+            self.deliver(c, &never);
+        }
+        self.usb.transfer_errors += session.stream.counters().transfer_errors;
+        self.usb.outages += 1;
+        let silent_ms = last_data.elapsed().as_secs_f64() * 1e3;
+        let message = format!(
+            "the EVK4 {} was disconnected (stream time {:.3} s, {silent_ms:.0} ms after its last data)",
+            session.camera.serial,
+            self.decoder.current_time_us() as f64 * 1e-6
+        );
+        drop(session);
+        eprintln!("live: {message}; reopening");
+        self.usb.last_error = Some(message);
+        report(self.out, "disconnected", None, &self.usb, &self.ring);
+        self.decoder.resynchronise();
+    }
+
+    /// What the run delivered, with the ring's counters.
+    fn finish(mut self, stopped: bool) -> SourceStats {
+        let mut stats = self.assembler.finish();
         stats.stopped = stopped;
-        stats.set_anomalies(decoder.anomalies());
-        let ring_counters = ring.counters();
-        usb.bytes = ring_counters.bytes;
-        usb.dropped_transfers = ring_counters.dropped_chunks;
-        usb.dropped_bytes = ring_counters.dropped_bytes;
-        usb.max_ring_filled = ring_counters.max_filled as u64;
-        stats.usb = Some(usb);
-        Ok(stats)
+        stats.set_anomalies(self.decoder.anomalies());
+        let ring = self.ring.counters();
+        self.usb.bytes = ring.bytes;
+        self.usb.dropped_transfers = ring.dropped_chunks;
+        self.usb.dropped_bytes = ring.dropped_bytes;
+        self.usb.max_ring_filled = ring.max_filled as u64;
+        stats.usb = Some(self.usb);
+        stats
     }
 }

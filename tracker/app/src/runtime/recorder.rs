@@ -6,7 +6,7 @@
 //! depth frames and ground truth (if any) are copied along, so the result replays like the original (and, when
 //! the camera is the emulator streaming that recording, scores like it).
 
-use super::config::{Config, SourceKind, validate_live};
+use super::config::{Config, LiveConfig, SourceKind, validate_live};
 use super::source::StopFlag;
 use super::{RuntimeError, SourceError};
 use drivers::event::{EventCounter, Geometry};
@@ -17,9 +17,9 @@ use drivers::formats::any::EventFormat;
 use drivers::formats::evt3::Evt3Decoder;
 use drivers::raw::RawHeader;
 use drivers::recording::{Recording, RecordingMeta};
-use drivers::transfer_ring::TransferRing;
+use drivers::transfer_ring::{Chunk, TransferRing};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -66,22 +66,16 @@ fn copy_tree(from: &Path, to: &Path) -> std::io::Result<()> {
     }
 }
 
-/// Records the live rig of `config` into `out` (created; must not hold a recording already) until `seconds` of
-/// stream time (if given) or `stop`; `progress` is called about once a second.
-pub fn record(
-    config: &Config,
-    out: &Path,
-    seconds: Option<f64>,
-    stop: &StopFlag,
-    mut progress: impl FnMut(&RecordStats),
-) -> Result<RecordStats, RuntimeError> {
+/// The `[live]` table of a configuration and its depth recording, or why it cannot be recorded.
+fn live_and_depth(config: &Config) -> Result<(&LiveConfig, Recording), RuntimeError> {
+    let input = |m: String| RuntimeError::Source(SourceError::Input(m));
     let live = match (&config.source.kind, &config.live) {
         (SourceKind::Live, Some(live)) => live,
         _ => {
-            return Err(RuntimeError::Source(SourceError::Input(
+            return Err(input(
                 "record needs a live configuration ([source] kind = \"live\" and a [live] table)"
                     .into(),
-            )));
+            ));
         }
     };
     let Some(depth_dir) = live
@@ -95,48 +89,19 @@ pub fn record(
                 .into(),
         )));
     };
-    let depth = Recording::open(depth_dir)?;
-    if out.join("events.raw").exists() {
-        return Err(RuntimeError::Output(format!(
-            "{} already holds a recording",
-            out.display()
-        )));
-    }
-    std::fs::create_dir_all(out).map_err(io(out))?;
-    let settings = SensorSettings {
-        biases: validate_live::bias_offsets(live)
-            .map_err(|m| RuntimeError::Source(SourceError::Input(format!("live.biases: {m}"))))?,
-        erc_events_per_period: validate_live::erc_target(live).map_err(|m| {
-            RuntimeError::Source(SourceError::Input(format!(
-                "live.erc_events_per_second: {m}"
-            )))
-        })?,
-    };
-    let transfer_bytes = live.usb_transfer_kib * 1024;
-    let stream = StreamConfig {
-        transfers: live.usb_transfers,
-        transfer_bytes,
-        ring_slots: (live.ring_mib * 1024 * 1024)
-            .div_ceil(transfer_bytes)
-            .max(1),
-    };
-    let ring = Arc::new(TransferRing::new(stream.ring_slots, stream.transfer_bytes));
-    let serial = (!live.event_serial.is_empty()).then_some(live.event_serial.as_str());
-    let mut session = StreamingCamera::start(serial, &settings, stream, &ring)
-        .map_err(|e| RuntimeError::Source(SourceError::Input(e.to_string())))?;
-    let mut stats = RecordStats {
-        camera: session.describe(),
-        ..RecordStats::default()
-    };
-    let events_path = out.join("events.raw");
-    let mut file =
-        std::io::BufWriter::new(std::fs::File::create(&events_path).map_err(io(&events_path))?);
-    let release = drivers::evk4::identity::release_string(session.camera.release);
+    Ok((live, Recording::open(depth_dir)?))
+}
+
+/// `events.raw`'s header: EVT 3.0 at the IMX636's geometry, naming the camera, its firmware and the biases.
+fn header(session: &StreamingCamera, settings: &SensorSettings) -> RawHeader {
     let mut fields: Vec<(String, String)> = vec![
         ("camera_integrator_name".into(), "Prophesee".into()),
         ("plugin_name".into(), "hal_plugin_imx636_evk4".into()),
         ("serial_number".into(), session.camera.serial.clone()),
-        ("firmware".into(), release.clone()),
+        (
+            "firmware".into(),
+            drivers::evk4::identity::release_string(session.camera.release),
+        ),
         ("sensor".into(), session.camera.sensor.clone()),
         (
             "generator".into(),
@@ -154,57 +119,108 @@ pub fn record(
         .map(|(k, v)| (k.as_str(), v.as_str()))
         .collect();
     RawHeader::new(EventFormat::Evt3, Geometry::new(1280, 720), &extra)
-        .write(&mut file)
-        .map_err(io(&events_path))?;
-    let mut decoder = Evt3Decoder::new(Some(Geometry::new(1280, 720)));
-    let mut counter = EventCounter::new();
-    let (mut first_us, mut last_report) = (None, Instant::now());
-    let started = Instant::now();
-    let limit_us = seconds.map(|s| (s * 1e6) as i64);
-    loop {
-        if stop.is_set() {
-            break;
+}
+
+/// Writes the camera's bytes to `events.raw` as they come, counting what they hold.
+struct EventsFile {
+    file: std::io::BufWriter<std::fs::File>,
+    path: PathBuf,
+    decoder: Evt3Decoder,
+    counter: EventCounter,
+    first_us: Option<i64>,
+}
+
+impl EventsFile {
+    /// Creates `path` with `header`.
+    fn create(path: PathBuf, header: &RawHeader) -> Result<Self, RuntimeError> {
+        let mut file = std::io::BufWriter::new(std::fs::File::create(&path).map_err(io(&path))?);
+        header.write(&mut file).map_err(io(&path))?;
+        Ok(Self {
+            file,
+            path,
+            decoder: Evt3Decoder::new(Some(Geometry::new(1280, 720))),
+            counter: EventCounter::new(),
+            first_us: None,
+        })
+    }
+
+    /// Appends a chunk (after a gap, the decoder that counts resynchronises; the file keeps the bytes as they came).
+    fn append(&mut self, chunk: &Chunk, stats: &mut RecordStats) -> Result<(), RuntimeError> {
+        if chunk.after_gap {
+            self.decoder.resynchronise();
+            stats.gaps += 1;
         }
+        self.file.write_all(&chunk.bytes).map_err(io(&self.path))?;
+        stats.bytes += chunk.bytes.len() as u64;
+        self.decoder.decode(&chunk.bytes, &mut self.counter);
+        let now_us = self.decoder.current_time_us();
+        stats.stream_s = (now_us - *self.first_us.get_or_insert(now_us)) as f64 * 1e-6;
+        stats.events = self.counter.positive + self.counter.negative;
+        Ok(())
+    }
+
+    /// Flushes the file; the trigger edges counted go into `stats`.
+    fn finish(mut self, stats: &mut RecordStats) -> Result<(), RuntimeError> {
+        stats.trigger_edges = self.counter.trigger_edges.iter().flatten().sum();
+        self.file.flush().map_err(io(&self.path))
+    }
+}
+
+/// Records the live rig of `config` into `out` (created; must not hold a recording already) until `seconds` of
+/// stream time (if given) or `stop`; `progress` is called about once a second.
+pub fn record(
+    config: &Config,
+    out: &Path,
+    seconds: Option<f64>,
+    stop: &StopFlag,
+    mut progress: impl FnMut(&RecordStats),
+) -> Result<RecordStats, RuntimeError> {
+    let (live, depth) = live_and_depth(config)?;
+    if out.join("events.raw").exists() {
+        return Err(RuntimeError::Output(format!(
+            "{} already holds a recording",
+            out.display()
+        )));
+    }
+    std::fs::create_dir_all(out).map_err(io(out))?;
+    let input = |m: String| RuntimeError::Source(SourceError::Input(m));
+    let settings = validate_live::sensor_settings(live).map_err(input)?;
+    let stream = validate_live::stream_config(live);
+    let ring = Arc::new(TransferRing::new(stream.ring_slots, stream.transfer_bytes));
+    let serial = (!live.event_serial.is_empty()).then_some(live.event_serial.as_str());
+    let mut session = StreamingCamera::start(serial, &settings, stream, &ring)
+        .map_err(|e| input(e.to_string()))?;
+    let mut stats = RecordStats {
+        camera: session.describe(),
+        ..RecordStats::default()
+    };
+    let mut file = EventsFile::create(out.join("events.raw"), &header(&session, &settings))?;
+    let (started, mut last_report) = (Instant::now(), Instant::now());
+    while !stop.is_set() && seconds.is_none_or(|s| stats.stream_s < s) {
         let Some(chunk) = ring.pop(Duration::from_millis(20)) else {
             if session.stream.is_disconnected() {
                 stats.outages += 1;
                 eprintln!("record: the camera was disconnected; reopening");
                 drop(session);
                 session = reopen(serial, &settings, stream, &ring, stop)?;
-                decoder.resynchronise();
             }
             continue;
         };
-        if chunk.after_gap {
-            decoder.resynchronise();
-            stats.gaps += 1;
-        }
-        file.write_all(&chunk.bytes).map_err(io(&events_path))?;
-        stats.bytes += chunk.bytes.len() as u64;
-        decoder.decode(&chunk.bytes, &mut counter);
+        file.append(&chunk, &mut stats)?;
         ring.recycle(chunk);
-        let now_us = decoder.current_time_us();
-        let first = *first_us.get_or_insert(now_us);
-        stats.stream_s = (now_us - first) as f64 * 1e-6;
+        stats.wall_s = started.elapsed().as_secs_f64();
         if last_report.elapsed() >= Duration::from_secs(1) {
             last_report = Instant::now();
-            stats.wall_s = started.elapsed().as_secs_f64();
-            stats.events = counter.positive + counter.negative;
             progress(&stats);
-        }
-        if limit_us.is_some_and(|l| now_us - first >= l) {
-            break;
         }
     }
     stats.wall_s = started.elapsed().as_secs_f64();
     let _ = session.camera.stop();
     drop(session);
-    file.flush().map_err(io(&events_path))?;
+    file.finish(&mut stats)?;
     let ring_counters = ring.counters();
     stats.dropped_transfers = ring_counters.dropped_chunks;
     stats.dropped_bytes = ring_counters.dropped_bytes;
-    stats.events = counter.positive + counter.negative;
-    stats.trigger_edges = counter.trigger_edges.iter().flatten().sum();
     write_companions(&depth, live.trigger_channel, out, &stats)?;
     Ok(stats)
 }

@@ -11,8 +11,6 @@ use super::source::{Source, SourceError};
 use crate::publish::PoseSink;
 use crate::publish::csv::CsvPoseSink;
 use drivers::event::{CdEvent, EventSink, TriggerEdge};
-use drivers::evk4::camera::SensorSettings;
-use drivers::evk4::stream::StreamConfig;
 use drivers::recording::{CameraRig, ModelInfo, Recording};
 use drivers::timeline::TimelineConfig;
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
@@ -272,20 +270,8 @@ fn build_live_source(
     let scene = recording_scene(&rec, &config.objects)?;
     let mut schedule = rec.meta.trigger;
     schedule.channel = live.trigger_channel;
-    let invalid = |key: &str, m: String| RuntimeError::Tracker(format!("live.{key}: {m}"));
-    let settings = SensorSettings {
-        biases: validate_live::bias_offsets(live).map_err(|m| invalid("biases", m))?,
-        erc_events_per_period: validate_live::erc_target(live)
-            .map_err(|m| invalid("erc_events_per_second", m))?,
-    };
-    let transfer_bytes = live.usb_transfer_kib * 1024;
-    let stream = StreamConfig {
-        transfers: live.usb_transfers,
-        transfer_bytes,
-        ring_slots: (live.ring_mib * 1024 * 1024)
-            .div_ceil(transfer_bytes)
-            .max(1),
-    };
+    let settings = validate_live::sensor_settings(live).map_err(RuntimeError::Tracker)?;
+    let stream = validate_live::stream_config(live);
     let source = LiveEvk4Source::new(
         (!live.event_serial.is_empty()).then(|| live.event_serial.clone()),
         settings,

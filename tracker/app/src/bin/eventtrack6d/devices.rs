@@ -2,7 +2,7 @@
 
 use anyhow::Result;
 use clap::Args;
-use drivers::evk4::camera::list_cameras;
+use drivers::evk4::discovery::list_cameras;
 
 /// List the connected event cameras (Prophesee EVK4 and its OEM variants) the live source can open.
 ///

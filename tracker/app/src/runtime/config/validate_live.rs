@@ -2,7 +2,30 @@
 
 use super::{ConfigError, LiveConfig};
 use drivers::evk4::biases::BiasOffsets;
+use drivers::evk4::camera::SensorSettings;
 use drivers::evk4::imx636;
+use drivers::evk4::stream::StreamConfig;
+
+/// The sensor settings of a `[live]` table (biases and event-rate cap), or the key and why it is refused.
+pub fn sensor_settings(live: &LiveConfig) -> Result<SensorSettings, String> {
+    Ok(SensorSettings {
+        biases: bias_offsets(live).map_err(|m| format!("live.biases: {m}"))?,
+        erc_events_per_period: erc_target(live)
+            .map_err(|m| format!("live.erc_events_per_second: {m}"))?,
+    })
+}
+
+/// The USB data path of a `[live]` table: transfers in flight, their size, and the ring's slots.
+pub fn stream_config(live: &LiveConfig) -> StreamConfig {
+    let transfer_bytes = live.usb_transfer_kib * 1024;
+    StreamConfig {
+        transfers: live.usb_transfers,
+        transfer_bytes,
+        ring_slots: (live.ring_mib * 1024 * 1024)
+            .div_ceil(transfer_bytes)
+            .max(1),
+    }
+}
 
 /// The bias offsets of a `[live]` table, checked against the sensor's ranges.
 pub fn bias_offsets(live: &LiveConfig) -> Result<BiasOffsets, String> {
