@@ -135,3 +135,38 @@ impl BiasOffsets {
         (current & !0xFF) | code
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn offsets_in_range_are_applied_over_the_factory_code_and_others_are_refused() {
+        let o = BiasOffsets::from_named([("bias_diff_on", 20), ("bias_refr", -20)]).unwrap();
+        let (diff_on, off) = o.iter().find(|(b, _)| b.name == "bias_diff_on").unwrap();
+        assert_eq!(off, 20);
+        // The code (bits 7..0) becomes factory + offset; the bias's other fields are kept.
+        assert_eq!(
+            BiasOffsets::register_value(diff_on, off, 0x11A1_5566),
+            0x11A1_557A
+        );
+        assert_eq!(
+            BiasOffsets::from_named([("bias_diff", 24)]),
+            Err(BiasError::OutOfRange {
+                name: "bias_diff",
+                offset: 24,
+                min: -25,
+                max: 23
+            })
+        );
+        assert!(matches!(
+            BiasOffsets::from_named([("bias_pr", 1)]),
+            Err(BiasError::Unknown { .. })
+        ));
+        let e = BiasOffsets::from_named([("bias_hpf", -1)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bias_hpf") && e.contains("0..=120"), "{e}");
+    }
+}

@@ -245,3 +245,76 @@ pub fn erc_events_per_period(events_per_second: f64) -> Option<u32> {
     (per_period.is_finite() && (1.0..=f64::from(ERC_MAX_EVENTS_PER_PERIOD)).contains(&per_period))
         .then(|| per_period.round() as u32)
 }
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    fn writes(ops: &[RegisterOp]) -> Vec<(u32, u32)> {
+        ops.iter()
+            .filter_map(|op| match *op {
+                RegisterOp::Write { address, value } => Some((address, value)),
+                RegisterOp::Delay { .. } => None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn an_erc_cap_sets_its_target_and_tables_and_no_cap_turns_it_off() {
+        // 20 Mev/s over a 200 us reference period: 4000 events per period.
+        let target = erc_events_per_period(20e6).unwrap();
+        assert_eq!(target, 4000);
+        let on = writes(&erc(Some(target)));
+        assert!(on.contains(&(reg::ERC_TARGET_EVENTS, 4000)));
+        assert!(on.contains(&(reg::ERC_REFERENCE_PERIOD, 200)));
+        assert!(on.contains(&(reg::ERC_T_DROPPING, 1)));
+        assert_eq!(
+            on.iter()
+                .filter(|(a, _)| (reg::ERC_T_DROP_LUT..reg::ERC_T_DROP_LUT + 1024).contains(a))
+                .count(),
+            256
+        );
+        assert_eq!(on.first(), Some(&(reg::ERC_PIPELINE, 0x0015_5400)));
+        assert_eq!(on.last(), Some(&(reg::ERC_PIPELINE, 0x0015_5401)));
+        let off = writes(&erc(None));
+        assert!(off.contains(&(reg::ERC_CONTROL, 0b10)));
+        assert!(off.contains(&(reg::ERC_T_DROPPING, 0)));
+        assert!(!off.iter().any(|(a, _)| *a == reg::ERC_TARGET_EVENTS));
+    }
+
+    #[test]
+    fn erc_caps_outside_the_register_are_refused() {
+        assert_eq!(
+            erc_events_per_period(1000.0),
+            None,
+            "below one event per period"
+        );
+        assert_eq!(erc_events_per_period(f64::NAN), None);
+        assert_eq!(
+            erc_events_per_period(1e13),
+            None,
+            "beyond 22 bits per period"
+        );
+        assert!(erc_events_per_period(5000.0).is_some());
+    }
+
+    #[test]
+    fn the_trigger_input_is_bit_10_of_the_edf_control() {
+        assert_eq!(
+            trigger_input(true),
+            RegisterOp::Write {
+                address: 0x7004,
+                value: 0xC5FF
+            }
+        );
+        assert_eq!(
+            trigger_input(false),
+            RegisterOp::Write {
+                address: 0x7004,
+                value: 0xC1FF
+            }
+        );
+        assert_eq!(EDF_TRIGGER_ON & !EDF_TRIGGER_OFF, 1 << 10);
+    }
+}
