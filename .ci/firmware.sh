@@ -15,16 +15,8 @@ target=thumbv7em-none-eabihf
 # Same directory the QEMU test in firmware-trigger/tests/ builds into, so CI compiles once.
 fw_target_dir="${repo_root}/target/firmware"
 
-as_root() {
-    if [ "$(id -u)" -eq 0 ]; then
-        "$@"
-    elif command -v sudo >/dev/null 2>&1; then
-        sudo "$@"
-    else
-        echo "firmware.sh: need root to run: $*" >&2
-        return 1
-    fi
-}
+# as_root, install_from_backports.
+source "${repo_root}/.ci/debian.sh"
 
 qemu_major() {
     # Prints the major version of qemu-system-arm, or nothing when it is not installed.
@@ -35,19 +27,7 @@ qemu_major() {
 major="$(qemu_major)"
 if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
     echo "firmware.sh: installing qemu-system-arm from bookworm-backports (found: ${major:-none})"
-    list=/etc/apt/sources.list.d/bookworm-backports.sources
-    if ! grep -rqs 'bookworm-backports' /etc/apt/sources.list.d/ /etc/apt/sources.list 2>/dev/null; then
-        # Same mirror and keyring as the existing bookworm entry.
-        uri="$(awk '/^URIs:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources 2>/dev/null || true)"
-        key="$(awk '/^Signed-By:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources 2>/dev/null || true)"
-        uri="${uri:-http://deb.debian.org/debian}"
-        key="${key:-/usr/share/keyrings/debian-archive-keyring.gpg}"
-        printf 'Types: deb\nURIs: %s\nSuites: bookworm-backports\nComponents: main\nSigned-By: %s\n' \
-            "${uri}" "${key}" | as_root tee "${list}" >/dev/null
-    fi
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get update -q
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
-        -t bookworm-backports qemu-system-arm
+    install_from_backports qemu-system-arm
     major="$(qemu_major)"
     if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
         echo "firmware.sh: qemu-system-arm 10 or newer is required, got '${major:-none}'" >&2

@@ -107,6 +107,35 @@ fn live_run(
     }
 }
 
+/// A work directory for a VM test, or `None` (with the reason printed) where the VM cannot run.
+fn vm_work_dir() -> Option<tempfile::TempDir> {
+    if let Some(why) = vm::unavailable() {
+        eprintln!("skipped: the VM cannot run here: {why}");
+        return None;
+    }
+    Some(vm::work_dir().unwrap())
+}
+
+/// `eventtrack6d track` of `rec` on the host: the pose CSV.
+fn track_offline(dir: &Path, rec: &Path) -> String {
+    let csv = dir.join("offline.csv");
+    let out = Command::new(vm::bin_dir().join("eventtrack6d"))
+        .args([
+            "track",
+            rec.to_str().unwrap(),
+            "--out",
+            csv.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    std::fs::read_to_string(&csv).unwrap()
+}
+
 fn rows(csv: &str) -> Vec<&str> {
     csv.lines()
         .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
@@ -119,27 +148,9 @@ fn t_us(row: &str) -> i64 {
 
 #[test]
 fn a_live_run_through_the_kernel_usb_stack_publishes_the_offline_poses() {
-    if let Some(why) = vm::unavailable() {
-        eprintln!("skipped: the VM cannot run here: {why}");
-        return;
-    }
-    let work = vm::work_dir().unwrap();
+    let Some(work) = vm_work_dir() else { return };
     let rec = recording(work.path(), 3.0);
-    let offline_csv = work.path().join("offline.csv");
-    let offline = Command::new(vm::bin_dir().join("eventtrack6d"))
-        .args([
-            "track",
-            rec.to_str().unwrap(),
-            "--out",
-            offline_csv.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        offline.status.success(),
-        "{}",
-        String::from_utf8_lossy(&offline.stderr)
-    );
+    let offline_text = track_offline(work.path(), &rec);
     let run = live_run(
         work.path(),
         &rec,
@@ -158,7 +169,6 @@ fn a_live_run_through_the_kernel_usb_stack_publishes_the_offline_poses() {
     assert!(run.stdout.contains("usable: yes"), "{}", run.all());
     assert_eq!(run.usb("transfers dropped"), 0, "{}", run.all());
     let live = run.poses();
-    let offline_text = std::fs::read_to_string(&offline_csv).unwrap();
     let offline = rows(&offline_text);
     // Every tick within the live run's stream time, to the bit.
     let within = offline
@@ -180,11 +190,7 @@ fn a_live_run_through_the_kernel_usb_stack_publishes_the_offline_poses() {
 
 #[test]
 fn an_unplugged_camera_is_reported_reopened_and_tracked_again() {
-    if let Some(why) = vm::unavailable() {
-        eprintln!("skipped: the VM cannot run here: {why}");
-        return;
-    }
-    let work = vm::work_dir().unwrap();
+    let Some(work) = vm_work_dir() else { return };
     let rec = recording(work.path(), 3.0);
     let run = live_run(
         work.path(),
@@ -235,11 +241,7 @@ fn an_unplugged_camera_is_reported_reopened_and_tracked_again() {
 
 #[test]
 fn a_burst_the_ring_cannot_hold_is_dropped_counted_and_resynchronised() {
-    if let Some(why) = vm::unavailable() {
-        eprintln!("skipped: the VM cannot run here: {why}");
-        return;
-    }
-    let work = vm::work_dir().unwrap();
+    let Some(work) = vm_work_dir() else { return };
     let rec = recording(work.path(), 1.0);
     let run = live_run(
         work.path(),
@@ -274,27 +276,9 @@ fn a_burst_the_ring_cannot_hold_is_dropped_counted_and_resynchronised() {
 
 #[test]
 fn a_recorded_session_replays_to_the_offline_poses_of_what_the_camera_saw() {
-    if let Some(why) = vm::unavailable() {
-        eprintln!("skipped: the VM cannot run here: {why}");
-        return;
-    }
-    let work = vm::work_dir().unwrap();
+    let Some(work) = vm_work_dir() else { return };
     let rec = recording(work.path(), 1.0);
-    let offline_csv = work.path().join("offline.csv");
-    let offline = Command::new(vm::bin_dir().join("eventtrack6d"))
-        .args([
-            "track",
-            rec.to_str().unwrap(),
-            "--out",
-            offline_csv.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        offline.status.success(),
-        "{}",
-        String::from_utf8_lossy(&offline.stderr)
-    );
+    let offline_text = track_offline(work.path(), &rec);
     let run = live_run(
         work.path(),
         &rec,
@@ -310,7 +294,6 @@ fn a_recorded_session_replays_to_the_offline_poses_of_what_the_camera_saw() {
         run.all()
     );
     let recorded = run.poses();
-    let offline_text = std::fs::read_to_string(&offline_csv).unwrap();
     let offline = rows(&offline_text);
     assert!(
         recorded.len() >= 100,
@@ -327,27 +310,9 @@ fn a_recorded_session_replays_to_the_offline_poses_of_what_the_camera_saw() {
 
 #[test]
 fn a_stalled_camera_delays_the_stream_but_changes_no_pose() {
-    if let Some(why) = vm::unavailable() {
-        eprintln!("skipped: the VM cannot run here: {why}");
-        return;
-    }
-    let work = vm::work_dir().unwrap();
+    let Some(work) = vm_work_dir() else { return };
     let rec = recording(work.path(), 1.0);
-    let offline_csv = work.path().join("offline.csv");
-    let offline = Command::new(vm::bin_dir().join("eventtrack6d"))
-        .args([
-            "track",
-            rec.to_str().unwrap(),
-            "--out",
-            offline_csv.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        offline.status.success(),
-        "{}",
-        String::from_utf8_lossy(&offline.stderr)
-    );
+    let offline_text = track_offline(work.path(), &rec);
     let camera = [
         "--pace",
         "fast",
@@ -362,7 +327,6 @@ fn a_stalled_camera_delays_the_stream_but_changes_no_pose() {
     assert_eq!(run.usb("outage(s)"), 0, "{}", run.all());
     assert_eq!(run.usb("transfers dropped"), 0, "{}", run.all());
     let live = run.poses();
-    let offline_text = std::fs::read_to_string(&offline_csv).unwrap();
     let offline = rows(&offline_text);
     assert!(live.len() >= 100, "{}", run.all());
     assert_eq!(live[..], offline[..live.len()], "a stall changed the poses");
@@ -370,11 +334,7 @@ fn a_stalled_camera_delays_the_stream_but_changes_no_pose() {
 
 #[test]
 fn malformed_words_from_the_camera_are_skipped_and_counted() {
-    if let Some(why) = vm::unavailable() {
-        eprintln!("skipped: the VM cannot run here: {why}");
-        return;
-    }
-    let work = vm::work_dir().unwrap();
+    let Some(work) = vm_work_dir() else { return };
     let rec = recording(work.path(), 0.5);
     let camera = ["--pace", "fast", "--malformed-every", "5000"];
     let run = live_run(work.path(), &rec, 0.4, "ring_mib = 256", &camera, &[]);
@@ -397,11 +357,7 @@ fn malformed_words_from_the_camera_are_skipped_and_counted() {
 
 #[test]
 fn a_failing_register_write_stops_the_run_naming_the_register() {
-    if let Some(why) = vm::unavailable() {
-        eprintln!("skipped: the VM cannot run here: {why}");
-        return;
-    }
-    let work = vm::work_dir().unwrap();
+    let Some(work) = vm_work_dir() else { return };
     let rec = recording(work.path(), 0.3);
     let run = live_run(
         work.path(),

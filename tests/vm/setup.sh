@@ -19,16 +19,8 @@ repo_root="$(cd "${here}/../.." && pwd)"
 vm_dir="${repo_root}/target/vm"
 dl_dir="${vm_dir}/downloads"
 
-as_root() {
-    if [ "$(id -u)" -eq 0 ]; then
-        "$@"
-    elif command -v sudo >/dev/null 2>&1; then
-        sudo "$@"
-    else
-        echo "vm/setup.sh: need root to run: $*" >&2
-        return 1
-    fi
-}
+# as_root, install_from_backports.
+source "${repo_root}/.ci/debian.sh"
 
 apt_updated=0
 apt_update() {
@@ -47,18 +39,7 @@ qemu_major() {
 major="$(qemu_major)"
 if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
     echo "vm/setup.sh: installing qemu-system-x86 from bookworm-backports (found: ${major:-none})"
-    list=/etc/apt/sources.list.d/bookworm-backports.sources
-    if ! grep -rqs 'bookworm-backports' /etc/apt/sources.list.d/ /etc/apt/sources.list 2>/dev/null; then
-        uri="$(awk '/^URIs:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources 2>/dev/null || true)"
-        key="$(awk '/^Signed-By:/ {print $2; exit}' /etc/apt/sources.list.d/debian.sources 2>/dev/null || true)"
-        uri="${uri:-http://deb.debian.org/debian}"
-        key="${key:-/usr/share/keyrings/debian-archive-keyring.gpg}"
-        printf 'Types: deb\nURIs: %s\nSuites: bookworm-backports\nComponents: main\nSigned-By: %s\n' \
-            "${uri}" "${key}" | as_root tee "${list}" >/dev/null
-    fi
-    apt_update
-    as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
-        -t bookworm-backports qemu-system-x86
+    install_from_backports qemu-system-x86
     major="$(qemu_major)"
     if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
         echo "vm/setup.sh: qemu-system-x86 10 or newer is required, got '${major:-none}'" >&2

@@ -78,17 +78,8 @@ fn live_and_depth(config: &Config) -> Result<(&LiveConfig, Recording), RuntimeEr
             ));
         }
     };
-    let Some(depth_dir) = live
-        .depth_recording
-        .as_ref()
-        .filter(|_| live.depth_camera == "recording")
-    else {
-        return Err(RuntimeError::Source(SourceError::NotImplemented(
-            "live.depth_camera = \"d435i\": the live D435i driver is not implemented yet; record with \
-             depth_camera = \"recording\" (its cameras, objects and depth frames are copied along)"
-                .into(),
-        )));
-    };
+    let depth_dir = validate_live::depth_recording(live, "record")
+        .map_err(|m| RuntimeError::Source(SourceError::NotImplemented(m)))?;
     Ok((live, Recording::open(depth_dir)?))
 }
 

@@ -255,17 +255,8 @@ fn build_live_source(
             "source.kind = \"live\" needs a [live] table".into(),
         ));
     };
-    let Some(depth_dir) = live
-        .depth_recording
-        .as_ref()
-        .filter(|_| live.depth_camera == "recording")
-    else {
-        return Err(RuntimeError::Source(SourceError::NotImplemented(
-            "live.depth_camera = \"d435i\": the live D435i driver is not implemented yet; use \
-             depth_camera = \"recording\" with depth_recording to run the live EVK4 with a recording's depth"
-                .into(),
-        )));
-    };
+    let depth_dir = validate_live::depth_recording(live, "run")
+        .map_err(|m| RuntimeError::Source(SourceError::NotImplemented(m)))?;
     let rec = Recording::open(depth_dir)?;
     let scene = recording_scene(&rec, &config.objects)?;
     let mut schedule = rec.meta.trigger;

@@ -6,6 +6,23 @@ use drivers::evk4::camera::SensorSettings;
 use drivers::evk4::imx636;
 use drivers::evk4::stream::StreamConfig;
 
+/// The recording whose depth a `[live]` table uses (`depth_camera = "recording"`), or why there is none: the live
+/// D435i driver is not there yet. `what` says what the caller does with it ("run", "record").
+pub fn depth_recording<'a>(
+    live: &'a LiveConfig,
+    what: &str,
+) -> Result<&'a std::path::Path, String> {
+    live.depth_recording
+        .as_deref()
+        .filter(|_| live.depth_camera == "recording")
+        .ok_or_else(|| {
+            format!(
+                "live.depth_camera = \"d435i\": the live D435i driver is not implemented yet; {what} with \
+                 depth_camera = \"recording\" and depth_recording (the live EVK4 with a recording's depth frames)"
+            )
+        })
+}
+
 /// The sensor settings of a `[live]` table (biases and event-rate cap), or the key and why it is refused.
 pub fn sensor_settings(live: &LiveConfig) -> Result<SensorSettings, String> {
     Ok(SensorSettings {
