@@ -189,16 +189,17 @@ fn a_live_run_through_the_kernel_usb_stack_publishes_the_offline_poses() {
 }
 
 #[test]
-fn an_unplugged_camera_is_reported_reopened_and_tracked_again() {
+fn an_unplugged_camera_is_reported_published_through_reopened_and_tracked_again() {
     let Some(work) = vm_work_dir() else { return };
     let rec = recording(work.path(), 3.0);
+    // The run ends two seconds after the camera has sent everything (Ctrl-C), however long the outage took.
     let run = live_run(
         work.path(),
         &rec,
-        2.9,
+        1000.0,
         "ring_mib = 512",
         &["--pace", "fast", "--unplug-after", "0.5"],
-        &["REPLUG=1"],
+        &["REPLUG=1", "STOP_WHEN_FINISHED=1"],
     );
     assert!(run.ok, "{}", run.all());
     // Reported at once: the stream time it happened at, and how long after the camera's last data.
@@ -220,21 +221,35 @@ fn an_unplugged_camera_is_reported_reopened_and_tracked_again() {
     assert_eq!(run.usb("outage(s)"), 1, "{}", run.all());
     assert_eq!(run.usb("session(s)"), 2, "{}", run.all());
     assert_eq!(run.camera()["unplugs"], 1, "{}", run.all());
-    // Tracking resumed on the camera's return: poses published from after the outage to the run's end.
-    let unplugged_at: f64 = report
+    let unplugged_us = (report
         .split("stream time ")
         .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|s| s.parse::<f64>().ok())
         .unwrap()
-        .split(' ')
-        .next()
-        .unwrap()
-        .parse()
-        .unwrap();
+        * 1e6) as i64;
+    // While the camera was away (at least the 0.5 s before the re-plug and the 2.5 s bring-up), the tick pulses
+    // went on on the wall clock and every tick published the object, as `lost` (no measurement is there).
+    assert!(run.usb("tick pulses made") >= 100, "{}", run.all());
     let poses = run.poses();
-    let last = t_us(poses.last().unwrap()) as f64 * 1e-6;
+    let during: Vec<&&str> = poses
+        .iter()
+        .filter(|r| (unplugged_us + 200_000..unplugged_us + 2_000_000).contains(&t_us(r)))
+        .collect();
     assert!(
-        last > unplugged_at + 1.0,
-        "last pose at {last} s, unplugged at {unplugged_at} s:\n{}",
+        during.len() >= 200,
+        "{} poses in the 1.8 s after the unplug:\n{}",
+        during.len(),
+        run.all()
+    );
+    assert!(during.iter().all(|r| r.ends_with(",0,lost")), "{during:?}");
+    // Tracking resumed on the camera's return: its stream continues after the pulses made meanwhile, and the
+    // tracker's own states are published again.
+    let last = t_us(poses.last().unwrap());
+    assert!(!poses.last().unwrap().ends_with(",0,lost"), "{}", run.all());
+    assert!(
+        last > unplugged_us + 3_000_000,
+        "last pose at {last} us, unplugged at {unplugged_us} us:\n{}",
         run.all()
     );
 }

@@ -8,6 +8,7 @@
 # `=== poses.csv ===` / `=== camera.json ===` markers (the guest's files do not reach the host). With REPLUG=1 in
 # the environment, the camera is attached again after it unplugs (as a user plugs the cable back in). With
 # MODE=record, `eventtrack6d record` captures the session instead and `eventtrack6d track` tracks the recording.
+# With STOP_WHEN_FINISHED=1, the run is stopped (Ctrl-C) two seconds after the camera has sent the whole recording.
 set -euo pipefail
 bin="$1" rec="$2" config="$3" seconds="$4"
 shift 4
@@ -32,6 +33,13 @@ if [ "${REPLUG:-0}" = 1 ]; then
         echo "replug: the camera is gone; attaching it again in 0.5 s" >&2
         sleep 0.5
         python3 "${here}/attach.py" 127.0.0.1:3240 1-1 >/dev/null
+    ) &
+fi
+if [ "${STOP_WHEN_FINISHED:-0}" = 1 ]; then
+    (
+        until grep -qs '"finished": true' /tmp/camera.json; do sleep 0.2; done
+        sleep 2
+        pkill -INT -f "eventtrack6d run --config" || true
     ) &
 fi
 status=0

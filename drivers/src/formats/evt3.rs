@@ -80,6 +80,18 @@ impl Evt3Decoder {
         }
     }
 
+    /// Starts a new stream (a camera that was reopened: its time counter restarted): like a fresh decoder, but
+    /// the anomaly counters so far are kept.
+    pub fn restart(&mut self) {
+        self.finish();
+        let anomalies = self.anomalies;
+        let (limit_x, limit_y) = (self.limit_x, self.limit_y);
+        *self = Self::new(None);
+        self.limit_x = limit_x;
+        self.limit_y = limit_y;
+        self.anomalies = anomalies;
+    }
+
     /// Forgets the position in the stream after a gap (bytes lost in transit): a held-back partial word is
     /// counted as [`AnomalyKind::TruncatedWord`], and words are skipped (counted as skipped before sync) until
     /// the next TIME_HIGH and row. The time base is kept, so a wrap of the 24-bit counter during a gap shorter

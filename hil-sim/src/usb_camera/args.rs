@@ -38,7 +38,8 @@ pub struct UsbCameraArgs {
     /// The camera's serial number (hex).
     #[arg(long, value_name = "HEX", default_value = "00EE6D00")]
     pub serial: String,
-    /// Fault: close the host's socket (an unplug) once, after this many seconds of streaming.
+    /// Fault: close the host's socket (an unplug) once, this many seconds after the host has started the sensor
+    /// (read the answer to the start sequence's last write).
     #[arg(long, value_name = "S")]
     pub unplug_after: Option<f64>,
     /// Fault: hold the data back for --stall-ms once, after this many seconds of streaming.

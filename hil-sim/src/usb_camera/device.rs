@@ -59,10 +59,11 @@ pub struct Evk4Device {
     identity: CameraIdentity,
     sensor: SensorRegisters,
     failing_register: Option<u32>,
-    answers: VecDeque<Vec<u8>>,
+    /// Control answers waiting for the host, each with whether it acknowledges the sensor's start.
+    answers: VecDeque<(Vec<u8>, bool)>,
     stream: Arc<EventStream>,
     playback: Playback,
-    /// When the sensor started streaming in this session, if it did.
+    /// When the host read the answer to the write that started the sensor in this session, if it did.
     pub streaming_since: Option<Instant>,
     stats: CameraStats,
 }
@@ -128,18 +129,23 @@ impl UsbDevice for Evk4Device {
             self.stats.refused.push(reason);
         }
         if self.streaming() {
-            let now = Instant::now();
-            self.streaming_since.get_or_insert(now);
-            self.playback.start(now);
+            self.playback.start(Instant::now());
         }
-        self.answers.push_back(answer);
+        self.answers
+            .push_back((answer, self.streaming() && self.streaming_since.is_none()));
         Ok(())
     }
 
     fn bulk_in(&mut self, endpoint: u8, max_len: usize) -> BulkIn {
         match endpoint {
             CONTROL_IN => match self.answers.pop_front() {
-                Some(a) if a.len() <= max_len => BulkIn::Data(a),
+                Some((a, starts)) if a.len() <= max_len => {
+                    // The host has the answer to the write that started the sensor: it is streaming now.
+                    if starts {
+                        self.streaming_since.get_or_insert(Instant::now());
+                    }
+                    BulkIn::Data(a)
+                }
                 Some(_) => BulkIn::Failed(UrbError::Errno(usbip::server::errno::EOVERFLOW)),
                 None => BulkIn::Pending,
             },

@@ -247,6 +247,19 @@ pub struct CameraHealth {
     pub dropped_transfers: u64,
     /// Bytes of those transfers.
     pub dropped_bytes: u64,
+    /// The spans of stream time the camera was away, microseconds: ticks after the first and up to the second
+    /// (`None` while it is still away) were made on the wall clock with no measurement.
+    pub away_us: Vec<(i64, Option<i64>)>,
+}
+
+impl CameraHealth {
+    /// Whether a tick at stream time `t_us` fell while the camera was away.
+    pub fn away_at(&self, t_us: i64) -> bool {
+        self.away_us
+            .iter()
+            .rev()
+            .any(|&(after, until)| t_us > after && until.is_none_or(|u| t_us <= u))
+    }
 }
 
 impl Health {
@@ -454,6 +467,7 @@ mod tests {
             outages: 1,
             dropped_transfers: 3,
             dropped_bytes: 393_216,
+            away_us: vec![(1_000_000, Some(2_000_000)), (5_000_000, None)],
         });
         let doc = h.status_json("running");
         assert_eq!(doc["event_camera"]["state"], "disconnected");

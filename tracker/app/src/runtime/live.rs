@@ -3,10 +3,12 @@
 //! depth camera is configured, a recording's depth frames on the trigger timeline (`[live] depth_camera =
 //! "recording"`). The USB side never waits for the tracker: the transfer ring between them drops and counts when
 //! full, and the decoder resynchronises after every gap. A camera that goes away is reported, and reopened
-//! (with backoff) until the run stops; each outage is counted.
+//! (with backoff) until the run stops; each outage is counted, and meanwhile the tick pulses continue on the wall
+//! clock so the objects keep being published with the states the tracker gives them ([`super::live_clock`]).
 
 use super::assembly::StreamAssembler;
 use super::health::CameraHealth;
+use super::live_clock::LiveClock;
 use super::source::{Source, SourceError, SourceOutput, SourceStats, StopFlag, UsbStats};
 use drivers::event::EventBuffer;
 use drivers::evk4::camera::SensorSettings;
@@ -75,34 +77,73 @@ impl LiveEvk4Source {
 }
 
 impl LiveEvk4Source {
-    /// Opens the camera, retrying with backoff until it opens or the run stops. A fault of the camera's
-    /// configuration (a refused register, an unsupported device) ends the run at once.
+    /// Opens the camera, retrying with backoff until it opens or the run stops, while the reader keeps the tick
+    /// pulses coming if the camera was lost ([`LiveClock`]). The bring-up runs on a helper thread for that. A
+    /// fault of the camera's configuration (a refused register, an unsupported device) ends the run at once.
     fn open_until_stopped(
         &self,
-        ring: &Arc<TransferRing>,
-        out: &SourceOutput,
+        reader: &mut Reader<'_>,
         stop: &StopFlag,
-        usb: &mut UsbStats,
     ) -> Result<Option<StreamingCamera>, SourceError> {
         let mut wait = self.backoff.first;
         loop {
-            match StreamingCamera::start(self.serial.as_deref(), &self.settings, self.stream, ring)
-            {
+            let attempt = {
+                let (serial, settings, config) = (self.serial.clone(), self.settings, self.stream);
+                let ring = reader.ring.clone();
+                std::thread::Builder::new()
+                    .name("evk4-open".into())
+                    .spawn(move || {
+                        StreamingCamera::start(serial.as_deref(), &settings, config, &ring)
+                    })
+                    .map_err(|e| {
+                        SourceError::Input(format!("cannot start the camera thread: {e}"))
+                    })?
+            };
+            while !attempt.is_finished() {
+                if stop.is_set() {
+                    // The bring-up ends on its own; its camera is dropped with it.
+                    return Ok(None);
+                }
+                reader.while_away(stop);
+                std::thread::sleep(POLL);
+            }
+            let result = attempt
+                .join()
+                .map_err(|_| SourceError::Input("the camera thread panicked".into()))?;
+            match result {
                 Ok(s) => {
                     eprintln!("live: {} streaming", s.describe());
-                    usb.last_error = None;
-                    report(out, "streaming", Some(s.describe()), usb, ring);
+                    reader.usb.last_error = None;
+                    let back = reader.clock.camera_back();
+                    if let Some(span) = reader.away_us.last_mut().filter(|s| s.1.is_none()) {
+                        span.1 = Some(back);
+                    }
+                    report(
+                        reader.out,
+                        "streaming",
+                        Some(s.describe()),
+                        &reader.usb,
+                        &reader.ring,
+                        &reader.away_us,
+                    );
                     return Ok(Some(s));
                 }
                 Err(e) if !e.is_transient() => return Err(SourceError::Input(e.to_string())),
                 Err(e) => {
                     let e = e.to_string();
-                    if usb.last_error.as_deref() != Some(e.as_str()) {
+                    if reader.usb.last_error.as_deref() != Some(e.as_str()) {
                         eprintln!("live: {e}; retrying every {} ms", wait.as_millis());
-                        usb.last_error = Some(e);
+                        reader.usb.last_error = Some(e);
                     }
-                    usb.open_attempts_failed += 1;
-                    report(out, "opening", None, usb, ring);
+                    reader.usb.open_attempts_failed += 1;
+                    report(
+                        reader.out,
+                        "opening",
+                        None,
+                        &reader.usb,
+                        &reader.ring,
+                        &reader.away_us,
+                    );
                 }
             }
             let until = Instant::now() + wait;
@@ -110,6 +151,7 @@ impl LiveEvk4Source {
                 if stop.is_set() {
                     return Ok(None);
                 }
+                reader.while_away(stop);
                 std::thread::sleep(POLL.min(until - Instant::now()));
             }
             wait = (wait * 2).min(self.backoff.max);
@@ -124,6 +166,7 @@ fn report(
     camera: Option<String>,
     usb: &UsbStats,
     ring: &TransferRing,
+    away_us: &[(i64, Option<i64>)],
 ) {
     let c = ring.counters();
     out.camera_health(CameraHealth {
@@ -133,6 +176,7 @@ fn report(
         outages: usb.outages,
         dropped_transfers: c.dropped_chunks,
         dropped_bytes: c.dropped_bytes,
+        away_us: away_us.to_vec(),
     });
 }
 
@@ -172,13 +216,13 @@ impl Source for LiveEvk4Source {
             assembler,
             decoder: Evt3Decoder::new(Some(drivers::event::Geometry::new(1280, 720))),
             chunk: EventBuffer::new(),
+            clock: LiveClock::new(self.schedule),
+            away_us: Vec::new(),
             out,
         };
         let mut stopped = false;
         while !stop.is_set() {
-            let Some(session) =
-                self.open_until_stopped(&reader.ring, out, stop, &mut reader.usb)?
-            else {
+            let Some(session) = self.open_until_stopped(&mut reader, stop)? else {
                 break;
             };
             reader.usb.sessions += 1;
@@ -215,6 +259,9 @@ struct Reader<'a> {
     assembler: StreamAssembler<'a>,
     decoder: Evt3Decoder,
     chunk: EventBuffer,
+    clock: LiveClock,
+    /// Spans of stream time the camera was away (see [`CameraHealth::away_us`]).
+    away_us: Vec<(i64, Option<i64>)>,
     usb: UsbStats,
     out: &'a SourceOutput,
 }
@@ -229,7 +276,18 @@ impl Reader<'_> {
         self.chunk.clear();
         self.decoder.decode(&c.bytes, &mut self.chunk);
         self.ring.recycle(c);
+        self.clock.map(&mut self.chunk);
         self.assembler.feed(&self.chunk, stop);
+    }
+
+    /// While the camera is away: a tick pulse of the stream's clock when one is due, so the tracker keeps ticking.
+    fn while_away(&mut self, stop: &StopFlag) {
+        let now = Instant::now();
+        while let Some(edges) = self.clock.pulse_due(now) {
+            self.chunk.clear();
+            self.chunk.triggers.extend(edges);
+            self.assembler.feed(&self.chunk, stop);
+        }
     }
 
     /// Reads `session`'s data until the run ends or the camera goes away.
@@ -256,6 +314,7 @@ impl Reader<'_> {
                     Some(session.describe()),
                     &self.usb,
                     &self.ring,
+                    &self.away_us,
                 );
             }
             self.deliver(c, stop);
@@ -279,8 +338,18 @@ impl Reader<'_> {
         drop(session);
         eprintln!("live: {message}; reopening");
         self.usb.last_error = Some(message);
-        report(self.out, "disconnected", None, &self.usb, &self.ring);
-        self.decoder.resynchronise();
+        // A camera that comes back starts its own time base; the clock moves it to continue the stream.
+        self.decoder.restart();
+        let after = self.clock.camera_lost(Instant::now());
+        self.away_us.push((after, None));
+        report(
+            self.out,
+            "disconnected",
+            None,
+            &self.usb,
+            &self.ring,
+            &self.away_us,
+        );
     }
 
     /// What the run delivered, with the ring's counters.
@@ -293,6 +362,7 @@ impl Reader<'_> {
         self.usb.dropped_transfers = ring.dropped_chunks;
         self.usb.dropped_bytes = ring.dropped_bytes;
         self.usb.max_ring_filled = ring.max_filled as u64;
+        self.usb.pulses_made_while_away = self.clock.pulses_made;
         stats.usb = Some(self.usb);
         stats
     }

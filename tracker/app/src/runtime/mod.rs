@@ -17,6 +17,7 @@ mod error;
 pub mod health;
 pub mod latency_log;
 pub mod live;
+mod live_clock;
 mod priority;
 pub mod queue;
 pub mod recorder;

@@ -86,6 +86,8 @@ pub struct UsbStats {
     pub transfer_errors: u64,
     /// Gaps in the stream the decoder resynchronised after.
     pub gaps: u64,
+    /// Tick pulses made on the wall clock while the camera was away.
+    pub pulses_made_while_away: u64,
     /// Memory of the ring between USB and the decoder, bytes.
     pub ring_bytes: u64,
     /// The most ring slots filled at once.

@@ -192,7 +192,8 @@ impl std::fmt::Display for Summary {
             writeln!(
                 f,
                 "usb:             {} bytes received in {} session(s), {} outage(s), {} failed open(s); {} transfers \
-                 dropped ({} bytes; ring {} MiB), {} transfer errors, {} gaps resynchronised",
+                 dropped ({} bytes; ring {} MiB), {} transfer errors, {} gaps resynchronised, {} tick pulses made \
+                 while away",
                 u.bytes,
                 u.sessions,
                 u.outages,
@@ -201,7 +202,8 @@ impl std::fmt::Display for Summary {
                 u.dropped_bytes,
                 u.ring_bytes / (1024 * 1024),
                 u.transfer_errors,
-                u.gaps
+                u.gaps,
+                u.pulses_made_while_away
             )?;
             if let Some(e) = &u.last_error {
                 writeln!(f, "usb error:       {e}")?;

@@ -297,6 +297,7 @@ impl Worker {
         self.estimates.clear();
         self.tracker.tick(tick, &mut self.estimates);
         let tick_end = Instant::now();
+        self.mark_lost_while_the_camera_was_away(tick.t_us);
         self.publish(tick, decoded_at);
         let total = decoded_at.elapsed();
         self.record_health(tick, total);
@@ -316,6 +317,22 @@ impl Worker {
                 latency: total,
                 prepare,
             });
+        }
+    }
+
+    /// A tick made while the live event camera was away came from the wall clock with no measurement: every object
+    /// is published as `lost` (quality 0) at its last estimate, never as tracked from data that is not there.
+    fn mark_lost_while_the_camera_was_away(&mut self, t_us: i64) {
+        let away = self
+            .health()
+            .event_camera
+            .as_ref()
+            .is_some_and(|c| c.away_at(t_us));
+        if away {
+            for e in &mut self.estimates {
+                e.state = tracker::track::TrackingState::Lost;
+                e.quality = 0.0;
+            }
         }
     }
 
