@@ -65,19 +65,27 @@ fn allocations_of_steady_ticks(
     // grow by one now and then: ten rounds let it settle.
     let mut depth_tick = s.last_tick;
     depth_tick.depth_frame = Some(s.depth.index);
-    for _ in 0..10 {
+    // One tick, each followed by `prepare_next_tick` as in the runtime: with a depth frame or a plain one.
+    let step = |s: &mut eventtrack6d_tests::tick_fixture::SteadyTracker,
+                out: &mut Vec<_>,
+                with_depth: bool| {
         s.tracker.push_events(&events);
-        s.tracker.push_depth(
-            depth_tick.t_us - depth_late_us,
-            &mut s.depth,
-            DepthHandling::Now,
-        );
         out.clear();
-        s.tracker.tick(&depth_tick, &mut out);
+        if with_depth {
+            s.tracker.push_depth(
+                depth_tick.t_us - depth_late_us,
+                &mut s.depth,
+                DepthHandling::Now,
+            );
+            s.tracker.tick(&depth_tick, out);
+        } else {
+            s.tracker.tick(&s.last_tick, out);
+        }
         s.tracker.prepare_next_tick();
-        out.clear();
-        s.tracker.tick(&s.last_tick, &mut out);
-        s.tracker.prepare_next_tick();
+    };
+    for _ in 0..10 {
+        step(&mut s, &mut out, true);
+        step(&mut s, &mut out, false);
     }
     // Count up to three windows of eleven ticks and keep the fewest: an allocation made by every tick shows in
     // each window, while the pool's bounded growth when the machine is loaded (a helper thread descheduled for a
@@ -87,20 +95,7 @@ fn allocations_of_steady_ticks(
         ALLOCATIONS.store(0, Ordering::SeqCst);
         COUNTING.store(true, Ordering::SeqCst);
         for k in 0..10 {
-            s.tracker.push_events(&events);
-            if k % 4 == 0 {
-                s.tracker.push_depth(
-                    depth_tick.t_us - depth_late_us,
-                    &mut s.depth,
-                    DepthHandling::Now,
-                );
-                out.clear();
-                s.tracker.tick(&depth_tick, &mut out);
-            } else {
-                out.clear();
-                s.tracker.tick(&s.last_tick, &mut out);
-            }
-            s.tracker.prepare_next_tick();
+            step(&mut s, &mut out, k % 4 == 0);
         }
         // Let the helpers finish what they were given while counting.
         out.clear();
