@@ -28,3 +28,25 @@ install_from_backports() {
     as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends \
         -t bookworm-backports "$@"
 }
+
+# Makes sure QEMU's BINARY (qemu-system-arm, qemu-system-x86_64) is version 10 or newer, installing PACKAGE from
+# bookworm-backports otherwise (bookworm's 7.2 cannot be installed beside the machine's qemu-utils 10). LABEL
+# prefixes the messages.
+ensure_qemu10() {
+    local binary="$1" package="$2" label="$3" major
+    major() {
+        command -v "${binary}" >/dev/null 2>&1 || return 0
+        "${binary}" --version | sed -n 's/^QEMU emulator version \([0-9]*\)\..*/\1/p' | head -n 1
+    }
+    major="$(major)"
+    if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
+        echo "${label}: installing ${package} from bookworm-backports (found: ${major:-none})"
+        install_from_backports "${package}"
+        major="$(major)"
+        if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
+            echo "${label}: ${package} 10 or newer is required, got '${major:-none}'" >&2
+            return 1
+        fi
+    fi
+    echo "${label}: $("${binary}" --version | head -n 1)"
+}

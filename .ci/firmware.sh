@@ -15,26 +15,10 @@ target=thumbv7em-none-eabihf
 # Same directory the QEMU test in firmware-trigger/tests/ builds into, so CI compiles once.
 fw_target_dir="${repo_root}/target/firmware"
 
-# as_root, install_from_backports.
+# as_root, install_from_backports, ensure_qemu10.
 source "${repo_root}/.ci/debian.sh"
 
-qemu_major() {
-    # Prints the major version of qemu-system-arm, or nothing when it is not installed.
-    command -v qemu-system-arm >/dev/null 2>&1 || return 0
-    qemu-system-arm --version | sed -n 's/^QEMU emulator version \([0-9]*\)\..*/\1/p' | head -n 1
-}
-
-major="$(qemu_major)"
-if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
-    echo "firmware.sh: installing qemu-system-arm from bookworm-backports (found: ${major:-none})"
-    install_from_backports qemu-system-arm
-    major="$(qemu_major)"
-    if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
-        echo "firmware.sh: qemu-system-arm 10 or newer is required, got '${major:-none}'" >&2
-        exit 1
-    fi
-fi
-echo "firmware.sh: $(qemu-system-arm --version | head -n 1)"
+ensure_qemu10 qemu-system-arm qemu-system-arm firmware.sh
 
 # Read the list first: grep -q closing the pipe early would fail the pipeline under pipefail.
 installed_targets="$(rustup target list --installed)"

@@ -19,7 +19,7 @@ repo_root="$(cd "${here}/../.." && pwd)"
 vm_dir="${repo_root}/target/vm"
 dl_dir="${vm_dir}/downloads"
 
-# as_root, install_from_backports.
+# as_root, install_from_backports, ensure_qemu10.
 source "${repo_root}/.ci/debian.sh"
 
 apt_updated=0
@@ -30,23 +30,7 @@ apt_update() {
     fi
 }
 
-qemu_major() {
-    command -v qemu-system-x86_64 >/dev/null 2>&1 || return 0
-    qemu-system-x86_64 --version | sed -n 's/^QEMU emulator version \([0-9]*\)\..*/\1/p' | head -n 1
-}
-
-# --- QEMU -------------------------------------------------------------------------------------
-major="$(qemu_major)"
-if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
-    echo "vm/setup.sh: installing qemu-system-x86 from bookworm-backports (found: ${major:-none})"
-    install_from_backports qemu-system-x86
-    major="$(qemu_major)"
-    if [ -z "${major}" ] || [ "${major}" -lt 10 ]; then
-        echo "vm/setup.sh: qemu-system-x86 10 or newer is required, got '${major:-none}'" >&2
-        exit 1
-    fi
-fi
-echo "vm/setup.sh: $(qemu-system-x86_64 --version | head -n 1)"
+ensure_qemu10 qemu-system-x86_64 qemu-system-x86 vm/setup.sh
 
 # --- Debian packages unpacked into target/vm (kernel, busybox-static) ---------------------------
 # unpack PACKAGE DEST: apt-get download + dpkg-deb -x, once (DEST/.done records the package file).
