@@ -5,7 +5,8 @@
 
 pub mod can;
 pub mod csv;
-pub mod ros2;
+/// The ROS 2 wire formats (the `eventtrack6d-ros2` crate), re-exported for the sinks' users.
+pub use ::ros2;
 mod shared;
 pub mod zenoh;
 

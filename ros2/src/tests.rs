@@ -190,13 +190,22 @@ fn decoder_errors_are_specific() {
     );
     let mut zero = good.clone();
     zero[12..16].copy_from_slice(&0u32.to_le_bytes());
-    assert_eq!(decode_pose_stamped(&zero), Err(CdrError::ZeroLengthString));
+    assert_eq!(
+        decode_pose_stamped(&zero),
+        Err(CdrError::ZeroLengthString("header.frame_id"))
+    );
     let mut no_nul = good.clone();
     no_nul[21] = b'!';
-    assert_eq!(decode_pose_stamped(&no_nul), Err(CdrError::MissingNul));
+    assert_eq!(
+        decode_pose_stamped(&no_nul),
+        Err(CdrError::MissingNul("header.frame_id"))
+    );
     let mut bad_utf8 = good.clone();
     bad_utf8[16] = 0xFF;
-    assert_eq!(decode_pose_stamped(&bad_utf8), Err(CdrError::NotUtf8));
+    assert_eq!(
+        decode_pose_stamped(&bad_utf8),
+        Err(CdrError::NotUtf8("header.frame_id"))
+    );
     let mut huge = good.clone();
     huge[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
     assert!(matches!(

@@ -1,7 +1,8 @@
 //! rmw_zenoh's side of the ROS 2 graph: the per-sample attachment, topic key expressions, name checks and
 //! the liveliness tokens of a node and its publishers.
 
-use super::*;
+use crate::types::{POSE_STAMPED, RosType};
+use crate::{ATTACHMENT_LEN, CdrError, GID_LEN, LIVELINESS_ADMIN_SPACE};
 
 /// rmw_zenoh's per-sample attachment.
 ///
@@ -68,12 +69,12 @@ pub fn topic_key_expr(domain_id: u32, topic: &str, type_name: &str, type_hash: &
 
 /// The rmw_zenoh data key expression of a `geometry_msgs/msg/PoseStamped` topic.
 pub fn pose_stamped_key_expr(domain_id: u32, topic: &str) -> String {
-    topic_key_expr(
-        domain_id,
-        topic,
-        POSE_STAMPED_TYPE_NAME,
-        POSE_STAMPED_TYPE_HASH,
-    )
+    typed_key_expr(domain_id, topic, &POSE_STAMPED)
+}
+
+/// The rmw_zenoh data key expression of a topic or service of type `ty`.
+pub fn typed_key_expr(domain_id: u32, name: &str, ty: &RosType) -> String {
+    topic_key_expr(domain_id, name, ty.key_name, ty.hash)
 }
 
 /// rmw_zenoh's name mangling for liveliness key components: every `/` becomes `%`.
@@ -130,10 +131,68 @@ pub fn publisher_liveliness_key_expr(
     type_hash: &str,
     qos: &str,
 ) -> String {
+    entity_token(
+        node,
+        entity_id,
+        EntityKind::Publisher,
+        topic,
+        type_name,
+        type_hash,
+        qos,
+    )
+}
+
+/// The kinds of ROS 2 entities a liveliness token announces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum EntityKind {
+    /// A topic publisher (`MP`).
+    Publisher,
+    /// A topic subscription (`MS`).
+    Subscription,
+    /// A service server (`SS`).
+    ServiceServer,
+    /// A service client (`SC`).
+    ServiceClient,
+}
+
+impl EntityKind {
+    /// The two letters rmw_zenoh writes for the kind.
+    pub fn code(self) -> &'static str {
+        match self {
+            Self::Publisher => "MP",
+            Self::Subscription => "MS",
+            Self::ServiceServer => "SS",
+            Self::ServiceClient => "SC",
+        }
+    }
+}
+
+/// Liveliness token of a publisher, subscription, service server or client of type `ty` on `name` (a topic or
+/// service name), with rmw_zenoh's QoS string `qos`; see [`publisher_liveliness_key_expr`] for the layout.
+pub fn entity_liveliness_key_expr(
+    node: &RosNodeIdentity,
+    entity_id: u64,
+    kind: EntityKind,
+    name: &str,
+    ty: &RosType,
+    qos: &str,
+) -> String {
+    entity_token(node, entity_id, kind, name, ty.key_name, ty.hash, qos)
+}
+
+fn entity_token(
+    node: &RosNodeIdentity,
+    entity_id: u64,
+    kind: EntityKind,
+    name: &str,
+    type_name: &str,
+    type_hash: &str,
+    qos: &str,
+) -> String {
     format!(
         "{}/{}/{}/{}/{qos}",
-        node.prefix(entity_id, "MP"),
-        mangle_name(&fully_qualified_topic(topic)),
+        node.prefix(entity_id, kind.code()),
+        mangle_name(&fully_qualified_topic(name)),
         mangle_name(type_name),
         mangle_name(type_hash),
     )
