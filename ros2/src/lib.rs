@@ -44,6 +44,7 @@ pub use pose_stamped::{
     PoseStampedMsg, decode_pose_stamped, encode_pose_stamped, encode_pose_stamped_isometry,
     pose_fields, pose_stamped_encoded_len,
 };
+pub use types::RosType;
 pub use wire::{CdrReader, CdrWriter};
 
 /// ROS 2 type name of `geometry_msgs/msg/PoseStamped` as rmw_zenoh writes it into key expressions.

@@ -126,7 +126,7 @@ candump_log = "poses.candump.log"
 
     let session = subscriber_session(&format!("tcp/127.0.0.1:{port}"));
     let poses_sub = session
-        .declare_subscriber("0/eventtrack6d/**")
+        .declare_subscriber(ros2::pose_stamped_key_expr(0, "eventtrack6d/can/pose"))
         .wait()
         .unwrap();
     let status_sub = session

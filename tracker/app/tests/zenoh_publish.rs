@@ -51,14 +51,110 @@ fn now_ns() -> i64 {
         .as_nanos() as i64
 }
 
+/// TF, detections and diagnostics of the ticks published by [`poses_status_and_liveliness_reach_a_separate_session`]:
+/// one message of each per tick, on its key, describing every object as its pose sample does.
+fn check_tick_outputs(
+    sink: &ZenohPosePublisher,
+    sub: &zenoh::pubsub::Subscriber<zenoh::handlers::FifoChannelHandler<zenoh::sample::Sample>>,
+    objects: &[String],
+    t0_us: i64,
+    offset_ns: i64,
+    n_ticks: u64,
+) {
+    let [tf_key, det_key, diag_key] = sink.output_key_exprs().map(|k| k.unwrap().to_owned());
+    assert_eq!(
+        tf_key,
+        ros2::typed_key_expr(0, "/tf", &ros2::types::TF_MESSAGE)
+    );
+    assert_eq!(
+        det_key,
+        ros2::typed_key_expr(
+            0,
+            "eventtrack6d/detections",
+            &ros2::types::DETECTION3D_ARRAY
+        )
+    );
+    assert_eq!(
+        diag_key,
+        ros2::typed_key_expr(
+            0,
+            "eventtrack6d/diagnostics",
+            &ros2::types::DIAGNOSTIC_ARRAY
+        )
+    );
+    let mut got: HashMap<String, Vec<Vec<u8>>> = HashMap::new();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let outputs = [&tf_key, &det_key, &diag_key];
+    while outputs
+        .iter()
+        .any(|k| got.get(*k).map_or(0, Vec::len) < n_ticks as usize)
+    {
+        let left = deadline.saturating_duration_since(Instant::now());
+        let Some(sample) = sub.recv_timeout(left).unwrap() else {
+            panic!("timed out; received {:?}", got.keys().collect::<Vec<_>>());
+        };
+        let key = sample.key_expr().as_str().to_owned();
+        if outputs.contains(&&key) {
+            assert!(
+                sample.attachment().is_some(),
+                "{key} carries the attachment"
+            );
+            got.entry(key)
+                .or_default()
+                .push(sample.payload().to_bytes().into_owned());
+        }
+    }
+    let messages = got[&tf_key].iter().zip(&got[&det_key]).zip(&got[&diag_key]);
+    for (k, ((tf, det), diag)) in messages.enumerate() {
+        let t_us = t0_us + 8_333 * k as i64;
+        let stamp = t_us * 1000 + offset_ns;
+        let tf = ros2::tf::decode_tf_message(tf).unwrap();
+        let det = ros2::vision::decode_detection3d_array(det).unwrap();
+        let diag = ros2::diagnostic::decode_diagnostic_array(diag).unwrap();
+        assert_eq!(tf.len(), objects.len());
+        assert_eq!(det.detections.len(), objects.len());
+        assert_eq!(diag.status.len(), objects.len());
+        assert_eq!(det.header.stamp.as_nanos(), stamp);
+        assert_eq!(diag.header.frame_id, "eventtrack6d_camera");
+        for (o, name) in objects.iter().enumerate() {
+            let expected = ros2::Pose::from_isometry(&pose(o, k as u64));
+            assert_eq!(tf[o].header.stamp.as_nanos(), stamp);
+            assert_eq!(tf[o].header.frame_id, "eventtrack6d_camera");
+            assert_eq!(&tf[o].child_frame_id, name);
+            assert_eq!(tf[o].translation, expected.position);
+            assert_eq!(tf[o].rotation_xyzw, expected.orientation_xyzw);
+            let d = &det.detections[o];
+            assert_eq!(&d.id, name);
+            assert_eq!(d.results.len(), 1);
+            assert_eq!(&d.results[0].class_id, name);
+            assert_eq!(d.results[0].score, f64::from(0.9f32));
+            assert_eq!(d.results[0].pose, expected);
+            // No mesh given: a zero-sized box at the object's origin.
+            assert_eq!(d.bbox_size, [0.0; 3]);
+            assert_eq!(d.bbox_center, expected);
+            let s = &diag.status[o];
+            assert_eq!(s.level, ros2::diagnostic::level::OK);
+            assert_eq!(s.name, format!("eventtrack6d: {name}"));
+            assert_eq!(s.message, "tracking");
+            assert!(
+                s.values.contains(&("quality".into(), "0.9".into())),
+                "{:?}",
+                s.values
+            );
+            assert!(s.values.contains(&("t_us".into(), t_us.to_string())));
+        }
+    }
+}
+
 #[test]
 fn poses_status_and_liveliness_reach_a_separate_session() {
     let endpoint = format!("tcp/127.0.0.1:{}", free_port());
     let sub_session = subscriber_session(&endpoint);
     let poses_sub = sub_session
-        .declare_subscriber("0/eventtrack6d/**")
+        .declare_subscriber("0/eventtrack6d/*/pose/**")
         .wait()
         .unwrap();
+    let outputs_sub = sub_session.declare_subscriber("0/**").wait().unwrap();
     let status_sub = sub_session
         .declare_subscriber("eventtrack6d/status")
         .wait()
@@ -201,6 +297,7 @@ fn poses_status_and_liveliness_reach_a_separate_session() {
         }
     }
     assert_ne!(sink.gid(0), sink.gid(1), "each publisher has its own GID");
+    check_tick_outputs(&sink, &outputs_sub, &objects, t0_us, offset_ns, n_ticks);
 
     // The liveliness tokens are visible to the other session, as rmw_zenoh's graph cache queries them.
     let expected: BTreeSet<String> = sink
@@ -208,9 +305,17 @@ fn poses_status_and_liveliness_reach_a_separate_session() {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    assert_eq!(expected.len(), 3);
+    assert_eq!(
+        expected.len(),
+        6,
+        "node, 2 poses, TF, detections, diagnostics"
+    );
     let zid = sink.zid();
     assert!(expected.contains(&format!("@ros2_lv/0/{zid}/0/0/NN/%/%/eventtrack6d")));
+    assert!(expected.contains(&format!(
+        "@ros2_lv/0/{zid}/0/3/MP/%/%/eventtrack6d/%tf/tf2_msgs::msg::dds_::TFMessage_/\
+         RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087/::,:,:,:,,"
+    )));
     assert!(expected.contains(&format!(
         "@ros2_lv/0/{zid}/0/1/MP/%/%/eventtrack6d/%eventtrack6d%mug%pose/geometry_msgs::msg::dds_::PoseStamped_/\
          RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8/::,:,:,:,,"
@@ -498,4 +603,181 @@ fn pose_queries_can_be_turned_off() {
     };
     let sink = ZenohPosePublisher::new(&config, &["mug".to_string()], 0).expect("sink");
     assert_eq!(sink.pose_query_key_expr(0), None);
+}
+
+/// A set-pose sample and a reset call from another session reach the tracker's side of the control queue; the
+/// service's reply carries the outcome the tracker side gives, with the caller's sequence number and GID; a
+/// set-pose that cannot be used is refused before it reaches the tracker, and the diagnostics say so.
+#[test]
+fn set_pose_and_reset_reach_the_tracker_and_are_answered() {
+    use eventtrack6d::publish::control::{ControlCommand, ControlOutcome, control_channel};
+    use eventtrack6d::publish::zenoh::ObjectOutput;
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port());
+    let other = subscriber_session(&endpoint);
+    let config = ZenohConfig {
+        connect: vec![endpoint.clone()],
+        listen: vec![format!("tcp/127.0.0.1:{}", free_port())],
+        congestion_control: CongestionPolicy::Block,
+        ..Default::default()
+    };
+    let (sender, inbox) = control_channel();
+    let mut mug = ObjectOutput::named("mug");
+    mug.bounds = ([-0.04, -0.05, 0.0], [0.04, 0.05, 0.1]);
+    let mut sink = ZenohPosePublisher::with_outputs(&config, &[mug], 0, Some(sender)).unwrap();
+    let zid = sink.zid();
+    let tokens: BTreeSet<String> = sink
+        .liveliness_key_exprs()
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    assert!(tokens.contains(&format!(
+        "@ros2_lv/0/{zid}/0/5/MS/%/%/eventtrack6d/%eventtrack6d%mug%set_pose/geometry_msgs::msg::dds_::PoseStamped_/\
+         RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8/::,:,:,:,,"
+    )), "{tokens:#?}");
+    assert!(tokens.contains(&format!(
+        "@ros2_lv/0/{zid}/0/6/SS/%/%/eventtrack6d/%eventtrack6d%reset/std_srvs::srv::dds_::Trigger_/\
+         RIHS01_eeff2cd6fa5ad9d27cdf4dec64818317839b62f212a91e6b5304b634b2062c5f/::,:,:,:,,"
+    )), "{tokens:#?}");
+    let set_key = ros2::typed_key_expr(0, "eventtrack6d/mug/set_pose", &ros2::types::POSE_STAMPED);
+    let publisher = other.declare_publisher(set_key).wait().unwrap();
+    let mut payload = Vec::new();
+    let wrong_frame = |out: &mut Vec<u8>| {
+        ros2::encode_pose_stamped(
+            out,
+            ros2::RosTime::default(),
+            "world",
+            [0.0, 0.0, 0.5],
+            [0.0, 0.0, 0.0, 1.0],
+        )
+    };
+    // Connected once the other session sees the subscription's token; the declaration itself came before it.
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while other
+        .liveliness()
+        .get(format!("@ros2_lv/0/{zid}/**"))
+        .wait()
+        .unwrap()
+        .recv_timeout(Duration::from_millis(200))
+        .ok()
+        .flatten()
+        .is_none()
+    {
+        assert!(Instant::now() < deadline, "the sessions never connected");
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    let diag_sub = other
+        .declare_subscriber("0/eventtrack6d/diagnostics/**")
+        .wait()
+        .unwrap();
+    wrong_frame(&mut payload);
+    publisher.put(payload.clone()).wait().unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let tick = Tick {
+        index: 0,
+        t_us: 1000,
+        depth_frame: None,
+        synthesized: false,
+    };
+    let est = [PoseEstimate {
+        object: 0,
+        t_us: 1000,
+        pose: pose(0, 0),
+        quality: 0.5,
+        state: TrackingState::Degraded,
+    }];
+    let names = ["mug".to_string()];
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let diag = loop {
+        sink.publish(&TickPoses {
+            tick: &tick,
+            estimates: &est,
+            objects: &names,
+            decoded_at: Instant::now(),
+        })
+        .unwrap();
+        if let Some(sample) = diag_sub.recv_timeout(Duration::from_millis(100)).unwrap() {
+            break ros2::diagnostic::decode_diagnostic_array(&sample.payload().to_bytes()).unwrap();
+        }
+        assert!(Instant::now() < deadline, "no diagnostics arrived");
+    };
+    let status = &diag.status[0];
+    assert_eq!(status.level, ros2::diagnostic::level::WARN);
+    assert_eq!(status.message, "degraded");
+    let last = status
+        .values
+        .iter()
+        .find(|(k, _)| k == "last_control")
+        .expect("last_control");
+    assert!(
+        last.1.starts_with("refused: mug: frame_id \"world\""),
+        "{last:?}"
+    );
+    assert!(
+        inbox.try_next().is_none(),
+        "a pose in another frame never reaches the tracker"
+    );
+
+    ros2::encode_pose_stamped(
+        &mut payload,
+        ros2::RosTime { sec: 1, nanosec: 5 },
+        "",
+        [0.1, 0.2, 0.5],
+        [0.0, 0.0, 0.0, 1.0],
+    );
+    publisher.put(payload.clone()).wait().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let request = loop {
+        if let Some(r) = inbox.try_next() {
+            break r;
+        }
+        assert!(Instant::now() < deadline, "the set-pose never arrived");
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    match &request.command {
+        ControlCommand::SetPose {
+            object,
+            stamp_ns,
+            pose,
+        } => {
+            assert_eq!((*object, *stamp_ns), (0, 1_000_000_005));
+            assert!((pose.translation.vector - Vector3::new(0.1, 0.2, 0.5)).amax() < 1e-12);
+        }
+        other => panic!("{other:?}"),
+    }
+    (request.reply)(ControlOutcome::done("mug re-seeded"));
+
+    // The reset service, called as rmw_zenoh's clients call: a query with the CDR request and an attachment.
+    let service_key = ros2::typed_key_expr(0, "eventtrack6d/reset", &ros2::types::TRIGGER);
+    let mut req = Vec::new();
+    ros2::trigger::encode_trigger_request(&mut req);
+    let client_gid = [7u8; 16];
+    let attachment = Attachment {
+        sequence_number: 41,
+        source_timestamp_ns: now_ns(),
+        gid: client_gid,
+    };
+    let replies = other
+        .get(service_key)
+        .payload(req)
+        .attachment(attachment.to_bytes())
+        .timeout(Duration::from_secs(10))
+        .wait()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(10);
+    let request = loop {
+        if let Some(r) = inbox.try_next() {
+            break r;
+        }
+        assert!(Instant::now() < deadline, "the reset never arrived");
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    assert_eq!(request.command, ControlCommand::Reset);
+    (request.reply)(ControlOutcome::refused("no tick yet"));
+    let reply = replies.recv().unwrap().into_result().unwrap();
+    let response = ros2::trigger::decode_trigger_response(&reply.payload().to_bytes()).unwrap();
+    assert!(!response.success);
+    assert_eq!(response.message, "no tick yet");
+    let att = Attachment::from_bytes(&reply.attachment().unwrap().to_bytes()).unwrap();
+    assert_eq!((att.sequence_number, att.gid), (41, client_gid));
+    sink.close().unwrap();
 }

@@ -4,6 +4,7 @@
 //! [`SinkCounters`] and reported, and the sink carries on (retrying where the transport allows).
 
 pub mod can;
+pub mod control;
 pub mod csv;
 /// The ROS 2 wire formats (the `eventtrack6d-ros2` crate), re-exported for the sinks' users.
 pub use ::ros2;

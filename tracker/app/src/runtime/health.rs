@@ -230,6 +230,8 @@ pub struct Health {
     /// Late depth frames handed over to be carried only, because the tracker thread had fallen behind
     /// ([`super::depth_arrival::DepthArrival::should_shed`]).
     pub depth_frames_shed: u64,
+    /// What the control commands (re-seed, reset) did so far.
+    pub control: super::control::ControlCounters,
 }
 
 /// The live event camera as the status reports it.
@@ -305,6 +307,7 @@ impl Health {
             event_hold_overflows: 0,
             depth_frames_too_old: 0,
             depth_frames_shed: 0,
+            control: Default::default(),
         }
     }
 
@@ -397,6 +400,7 @@ impl Health {
             "tracker": self.tracker,
             "renderer": self.renderer,
             "event_camera": self.event_camera,
+            "control": self.control,
         })
     }
 }

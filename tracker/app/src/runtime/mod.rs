@@ -12,6 +12,7 @@
 
 mod assembly;
 pub mod config;
+pub mod control;
 pub mod depth_arrival;
 mod error;
 pub mod health;
@@ -93,7 +94,8 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
     let (mut sinks, outputs) = setup::build_file_sinks(config)?;
     let latency_log = setup::build_latency_log(config)?;
     // zenoh first: it is what robots subscribe to, so it gets the earliest slot of every tick.
-    let network = sinks::build_network_sinks(config, &objects, &outputs, rt.handle())?;
+    let mut network = sinks::build_network_sinks(config, &scene, &outputs, rt.handle())?;
+    let control = network.control.take();
     let outputs = OutputPaths {
         candump: network.candump.clone().or(outputs.candump),
         latency_log: config
@@ -129,6 +131,7 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
         queue,
         objects,
         outputs,
+        control,
         status_period: Duration::from_millis(config.status.period_ms),
         // A live camera's overload buffer is the transfer ring at the USB side (dropping, counted): the
         // ingest queue waits for room behind it.
@@ -167,6 +170,8 @@ struct Parts {
     queue: Arc<IngestQueue>,
     objects: Vec<String>,
     outputs: OutputPaths,
+    /// Control commands from the zenoh sink, carried out on the tracker thread.
+    control: Option<control::ControlApplier>,
     status_period: Duration,
     wait_for_room: bool,
     rt_priority: u8,
@@ -198,6 +203,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
         queue,
         objects,
         outputs,
+        control,
         status_period,
         wait_for_room,
         rt_priority,
@@ -211,6 +217,7 @@ async fn run_parts(p: Parts, mut hooks: Hooks) -> Result<RunEnd, RuntimeError> {
     // The tracker thread.
     let worker = Worker::new(tracker, sinks, timeline, queue.clone(), health.clone())
         .with_latency_log(latency_log)
+        .with_control(control)
         .with_depth_deferral(defer_depth)
         .with_depth_age_limit(depth_age_limit_ms);
     let tracker_thread = std::thread::Builder::new()

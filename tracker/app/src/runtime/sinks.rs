@@ -2,11 +2,14 @@
 //! SocketCAN).
 
 use super::config::Config;
+use super::control::ControlApplier;
 use super::error::RuntimeError;
-use super::setup::OutputPaths;
+use super::setup::{OutputPaths, TrackerScene};
 use crate::publish::SharedSink;
-use crate::publish::zenoh::ZenohPosePublisher;
+use crate::publish::control::control_channel;
+use crate::publish::zenoh::{ObjectOutput, ZenohPosePublisher};
 use crate::publish::{PoseSink, PublishError};
+use scene::mesh::{MeshLoadOptions, load_obj};
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
@@ -22,25 +25,43 @@ pub struct NetworkSinks {
     pub status: Option<StatusPut>,
     /// The candump log, when on.
     pub candump: Option<PathBuf>,
+    /// The tracker thread's side of the control commands the zenoh sink receives, when control is on.
+    pub control: Option<ControlApplier>,
 }
 
 /// Builds the zenoh and CAN sinks the configuration turns on. A zenoh session that cannot open is an error (the
 /// configuration asked for it); `runtime` runs the SocketCAN writer task.
 pub fn build_network_sinks(
     config: &Config,
-    objects: &[String],
+    scene: &TrackerScene,
     _outputs: &OutputPaths,
     runtime: &tokio::runtime::Handle,
 ) -> Result<NetworkSinks, RuntimeError> {
     let mut out = NetworkSinks::default();
+    let objects: Vec<String> = scene.objects.iter().map(|o| o.name.clone()).collect();
+    let objects = objects.as_slice();
     if config.sinks.zenoh {
+        let outputs = object_outputs(scene);
+        let (sender, inbox) = control_channel();
+        let control = config.zenoh.control.then_some(sender);
         // Stamps are the event camera's clock (offset 0): replayed and live poses carry their own time base.
-        let publisher = ZenohPosePublisher::new(&config.zenoh, objects, 0).map_err(|e| {
-            RuntimeError::Sink(PublishError::Transport {
-                sink: "zenoh".into(),
-                message: e.to_string(),
-            })
-        })?;
+        let ros_time_offset_ns = 0;
+        if control.is_some() {
+            out.control = Some(ControlApplier::new(
+                inbox,
+                scene.objects.iter().map(|o| o.first_pose.1).collect(),
+                ros_time_offset_ns,
+                config.zenoh.control_max_age_ms,
+            ));
+        }
+        let publisher =
+            ZenohPosePublisher::with_outputs(&config.zenoh, &outputs, ros_time_offset_ns, control)
+                .map_err(|e| {
+                    RuntimeError::Sink(PublishError::Transport {
+                        sink: "zenoh".into(),
+                        message: e.to_string(),
+                    })
+                })?;
         let shared = Arc::new(Mutex::new(publisher));
         out.sinks.push(Box::new(SharedSink::new(shared.clone())));
         out.status = Some(Box::new(move |json: &[u8]| {
@@ -74,6 +95,26 @@ pub fn build_network_sinks(
         out.sinks.extend(sinks);
     }
     Ok(out)
+}
+
+/// The objects as the zenoh outputs describe them: names and their meshes' bounds (zero-sized when a mesh does not
+/// load here; the tracker, which loaded it, reports that).
+fn object_outputs(scene: &TrackerScene) -> Vec<ObjectOutput> {
+    scene
+        .objects
+        .iter()
+        .map(|o| {
+            let mut out = ObjectOutput::named(&o.name);
+            if let Ok(loaded) = load_obj(&o.mesh, &MeshLoadOptions::default()) {
+                let b = loaded.mesh.aabb();
+                out.bounds = (
+                    [b.min.x, b.min.y, b.min.z].map(f64::from),
+                    [b.max.x, b.max.y, b.max.z].map(f64::from),
+                );
+            }
+            out
+        })
+        .collect()
 }
 
 /// The status document `json` with the zenoh sink's pose queries so far, `pose_queries: {answered, refused}`,

@@ -3,6 +3,7 @@
 //! to each sink, and measures latency (edge decoded -> after each sink, and after all sinks). Steady state
 //! allocates nothing: buffers are reused and event batches recycled.
 
+use super::control::ControlApplier;
 use super::depth_arrival::DepthArrival;
 use super::health::Health;
 use super::latency_log::{LatencyLog, TickTiming};
@@ -55,6 +56,8 @@ pub struct Worker {
     reported_old_depth: bool,
     /// Published ticks, for handing the sinks what the tracker revises of them.
     revisions: PoseRevisions,
+    /// Commands from outside (re-seed, reset), carried out before each tick; `None` when nothing sends them.
+    control: Option<ControlApplier>,
 }
 
 impl Worker {
@@ -90,7 +93,14 @@ impl Worker {
             depth_age_limit_us: None,
             reported_old_depth: false,
             revisions: PoseRevisions::new(objects_count),
+            control: None,
         }
+    }
+
+    /// Also carries out the control commands `control` receives, before each tick.
+    pub fn with_control(mut self, control: Option<ControlApplier>) -> Self {
+        self.control = control;
+        self
     }
 
     /// Also writes one row per tick into `log` ([`TickTiming`]).
@@ -294,6 +304,14 @@ impl Worker {
     /// One tick: track, publish, record health, hand over revisions, then start the next tick's work.
     fn tick(&mut self, tick: &drivers::timeline::Tick, decoded_at: Instant) {
         let tick_start = Instant::now();
+        if let Some(control) = self.control.as_mut()
+            && control.apply(self.tracker.as_mut(), tick.t_us, self.last_tick_us)
+        {
+            self.health
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .control = control.counters().clone();
+        }
         self.estimates.clear();
         self.tracker.tick(tick, &mut self.estimates);
         let tick_end = Instant::now();

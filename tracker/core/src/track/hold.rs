@@ -48,6 +48,17 @@ impl PoseTracker for HoldPoseTracker {
                 }),
         );
     }
+    fn reseed(&mut self, object: usize, _t_us: i64, pose: Isometry3<f64>) -> Result<(), String> {
+        if !is_finite(&pose) {
+            return Err("the pose is not finite".into());
+        }
+        let held = self
+            .poses
+            .get_mut(object)
+            .ok_or_else(|| format!("no object {object}"))?;
+        *held = pose;
+        Ok(())
+    }
     fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
         self.last_tick_us?;
         self.poses.get(object).map(|pose| PoseEstimate {
@@ -58,4 +69,10 @@ impl PoseTracker for HoldPoseTracker {
             state: TrackingState::Tracking,
         })
     }
+}
+
+/// Whether every number of `pose` is finite.
+pub(crate) fn is_finite(pose: &Isometry3<f64>) -> bool {
+    pose.translation.vector.iter().all(|v| v.is_finite())
+        && pose.rotation.coords.iter().all(|v| v.is_finite())
 }

@@ -40,6 +40,7 @@ pub use validate::{InvalidParameter, validate};
 use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
+use nalgebra::Isometry3;
 
 /// What a tracker does with a depth frame that arrives after its exposure's tick (one on time is used at its
 /// tick in every case).
@@ -105,5 +106,14 @@ pub trait PoseTracker: Send {
     /// depth frames); nothing if the tracker has no safety net.
     fn depth_fallback_checks(&self, out: &mut Vec<DepthFallbackCheck>) {
         let _ = out;
+    }
+    /// Re-seeds object `object` at `pose` (`T_cam_obj`, the event camera's frame) as its estimate at `t_us` (an
+    /// operator's or a detector's placement, or a reset to the first pose): the next tick refines from there with
+    /// no motion assumed, and the object is `tracking` again. Tracking again from late depth frames exposed before
+    /// the re-seed is given up (it would bring back the estimates the re-seed replaced). Returns why not for an
+    /// unknown object, a pose that is not finite, or a tracker that cannot be re-seeded.
+    fn reseed(&mut self, object: usize, t_us: i64, pose: Isometry3<f64>) -> Result<(), String> {
+        let _ = (object, t_us, pose);
+        Err("this tracker cannot be re-seeded".into())
     }
 }

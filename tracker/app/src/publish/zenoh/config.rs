@@ -78,6 +78,28 @@ pub struct ZenohConfig {
     /// Answer pose queries on `<prefix>/<object>/pose_at` (`?t_us=` or `?stamp_ns=`): the pose at any time
     /// within the last 2 s, interpolated between ticks. Default true.
     pub pose_queries: bool,
+    /// Publish `tf2_msgs/msg/TFMessage` on `tf_topic` every tick: the camera frame (`frame_id`) to one child frame
+    /// per object that is not `lost`. Default true.
+    pub tf: bool,
+    /// The TF topic. Default `/tf`.
+    pub tf_topic: String,
+    /// Child frame of each object in TF, by object name, e.g. `{ mug = "mug_link" }`; an object not listed uses
+    /// its name. Default empty.
+    pub tf_child_frames: std::collections::BTreeMap<String, String>,
+    /// Publish `vision_msgs/msg/Detection3DArray` on `<prefix>/detections` every tick: one detection per object,
+    /// the quality as its score, the mesh's bounding box. Default true.
+    pub detections: bool,
+    /// Publish `diagnostic_msgs/msg/DiagnosticArray` on `<prefix>/diagnostics` every tick: one status per object
+    /// (level OK tracking, WARN degraded, ERROR lost; state, quality, time and the latest control outcome as
+    /// values). Default true.
+    pub diagnostics: bool,
+    /// Accept control: a `geometry_msgs/msg/PoseStamped` on `<prefix>/<object>/set_pose` re-seeds that object, a
+    /// `std_srvs/srv/Trigger` call of the service `<prefix>/reset` resets every object to its first pose. Default
+    /// true.
+    pub control: bool,
+    /// A set-pose whose stamp lies more than this many milliseconds before (or after) the tick it would apply at
+    /// is refused (stamp 0 means now). Default 1000.
+    pub control_max_age_ms: u64,
 }
 
 impl Default for ZenohConfig {
@@ -95,6 +117,13 @@ impl Default for ZenohConfig {
             congestion_control: CongestionPolicy::Drop,
             express: true,
             pose_queries: true,
+            tf: true,
+            tf_topic: "/tf".into(),
+            tf_child_frames: std::collections::BTreeMap::new(),
+            detections: true,
+            diagnostics: true,
+            control: true,
+            control_max_age_ms: 1000,
         }
     }
 }
@@ -108,6 +137,34 @@ impl ZenohConfig {
     /// The zenoh key of an object's pose queries: `<prefix>/<object>/pose_at`.
     pub fn pose_query_key_expr(&self, object: &str) -> String {
         join_topic(&self.topic_prefix, &format!("{object}/pose_at"))
+    }
+
+    /// The ROS topic of the detections: `<prefix>/detections`.
+    pub fn detections_topic(&self) -> String {
+        join_topic(&self.topic_prefix, "detections")
+    }
+
+    /// The ROS topic of the tracking state: `<prefix>/diagnostics`.
+    pub fn diagnostics_topic(&self) -> String {
+        join_topic(&self.topic_prefix, "diagnostics")
+    }
+
+    /// The ROS topic that re-seeds an object: `<prefix>/<object>/set_pose`.
+    pub fn set_pose_topic(&self, object: &str) -> String {
+        join_topic(&self.topic_prefix, &format!("{object}/set_pose"))
+    }
+
+    /// The ROS service that resets every object: `<prefix>/reset`.
+    pub fn reset_service(&self) -> String {
+        join_topic(&self.topic_prefix, "reset")
+    }
+
+    /// The TF child frame of `object`.
+    pub fn tf_child_frame(&self, object: &str) -> String {
+        self.tf_child_frames
+            .get(object)
+            .cloned()
+            .unwrap_or_else(|| object.to_owned())
     }
 
     /// The zenoh key of the JSON status: `<prefix>/status`.
@@ -129,6 +186,20 @@ impl ZenohConfig {
             key: "zenoh.node_name",
             message,
         })?;
+        ros2::check_name_path(&self.tf_topic).map_err(|message| ZenohSetupError::Config {
+            key: "zenoh.tf_topic",
+            message,
+        })?;
+        if let Some((object, frame)) = self
+            .tf_child_frames
+            .iter()
+            .find(|(_, f)| f.is_empty() || f.contains('\0'))
+        {
+            return Err(ZenohSetupError::Config {
+                key: "zenoh.tf_child_frames",
+                message: format!("{object} = {frame:?}: a frame name must be non-empty text"),
+            });
+        }
         if self.frame_id.contains('\0') {
             return Err(ZenohSetupError::Config {
                 key: "zenoh.frame_id",

@@ -5,23 +5,29 @@
 //! The sink uses zenoh's synchronous API (`.wait()`), so it is called from a plain thread (zenoh runs its own tokio
 //! runtime inside). A transport failure is counted and returned as [`PublishError`], never a panic.
 
+mod commands;
 mod config;
+mod entity;
+mod outputs;
 mod pose_query;
 mod query_parameters;
 #[cfg(test)]
 mod tests;
 
 pub use config::{CongestionPolicy, SessionMode, ZenohConfig, ZenohSetupError};
+pub use outputs::ObjectOutput;
 pub use pose_query::{
     MAX_EXTRAPOLATION_US, PoseQueryCounters, PoseQueryError, RECENT_TICKS, RecentPoses,
     requested_time,
 };
 
-use super::ros2::{self, Attachment, RosNodeIdentity, RosTime};
+use super::control::ControlSender;
+use super::ros2::{self, RosNodeIdentity, types};
 use super::{PoseSink, PublishError, SinkCounters, TickPoses};
-use std::hash::{BuildHasher, Hasher};
+use commands::ControlEntities;
+use entity::{RosPublisher, SendOptions, declare_token};
+use outputs::{OutputContent, stamp_of};
 use std::sync::{Arc, Mutex};
-use std::time::{SystemTime, UNIX_EPOCH};
 use zenoh::Wait;
 use zenoh::bytes::Encoding;
 use zenoh::liveliness::LivelinessToken;
@@ -31,16 +37,16 @@ use zenoh::qos::{CongestionControl, Priority};
 /// Sink name used in errors, logs and the status topic.
 pub const SINK_NAME: &str = "zenoh";
 
-/// One object's publisher and its rmw_zenoh bookkeeping.
-struct ObjectPublisher {
-    publisher: Publisher<'static>,
-    key_expr: String,
-    liveliness_key_expr: String,
-    gid: [u8; ros2::GID_LEN],
-    next_sequence: i64,
+/// The per-tick outputs beside the poses (each `None` when turned off).
+struct TickOutputs {
+    content: OutputContent,
+    tf: Option<RosPublisher>,
+    detections: Option<RosPublisher>,
+    diagnostics: Option<RosPublisher>,
 }
 
-/// Publishes poses over zenoh in rmw_zenoh's format; see the module documentation.
+/// Publishes poses over zenoh in rmw_zenoh's format, with TF, detections and diagnostics, and takes control
+/// commands; see the module documentation.
 ///
 /// Header stamps: `header.stamp = t_us * 1000 + ros_time_offset_ns` nanoseconds, i.e. the pose's time on the event
 /// camera's clock shifted into ROS time by an offset fixed at construction. With offset 0 the stamp is the camera
@@ -48,7 +54,9 @@ struct ObjectPublisher {
 /// instant (e.g. when the first trigger edge is decoded).
 pub struct ZenohPosePublisher {
     session: zenoh::Session,
-    objects: Vec<ObjectPublisher>,
+    objects: Vec<RosPublisher>,
+    outputs: TickOutputs,
+    control: Option<ControlEntities>,
     status: Publisher<'static>,
     status_key_expr: String,
     node_liveliness_key_expr: String,
@@ -65,27 +73,46 @@ pub struct ZenohPosePublisher {
     query_counters: Arc<PoseQueryCounters>,
 }
 
+fn check_object_names(objects: &[ObjectOutput]) -> Result<(), ZenohSetupError> {
+    for (i, o) in objects.iter().enumerate() {
+        ros2::check_name_token(&o.name).map_err(|reason| ZenohSetupError::ObjectName {
+            name: o.name.clone(),
+            reason,
+        })?;
+        if objects[..i].iter().any(|p| p.name == o.name) {
+            return Err(ZenohSetupError::ObjectName {
+                name: o.name.clone(),
+                reason: "appears twice".into(),
+            });
+        }
+    }
+    Ok(())
+}
+
 impl ZenohPosePublisher {
     /// Opens a zenoh session from `config`, declares one pose publisher per object (in `objects` order, matching
     /// [`tracker::track::PoseEstimate::object`]), the status publisher, and the node and publisher liveliness tokens.
-    /// Returns promptly when no router is reachable (peer mode retries in the background).
+    /// Returns promptly when no router is reachable (peer mode retries in the background). The objects' bounding
+    /// boxes are unknown (zero-sized) and control is off; see [`Self::with_outputs`].
     pub fn new(
         config: &ZenohConfig,
         objects: &[String],
         ros_time_offset_ns: i64,
     ) -> Result<Self, ZenohSetupError> {
-        for (i, name) in objects.iter().enumerate() {
-            ros2::check_name_token(name).map_err(|reason| ZenohSetupError::ObjectName {
-                name: name.clone(),
-                reason,
-            })?;
-            if objects[..i].contains(name) {
-                return Err(ZenohSetupError::ObjectName {
-                    name: name.clone(),
-                    reason: "appears twice".into(),
-                });
-            }
-        }
+        let objects: Vec<ObjectOutput> = objects.iter().map(|n| ObjectOutput::named(n)).collect();
+        Self::with_outputs(config, &objects, ros_time_offset_ns, None)
+    }
+
+    /// Like [`Self::new`], with the objects' bounding boxes for the detections, and, with `control`, the
+    /// set-pose subscriptions and reset service (when `config.control`) sending their commands there.
+    pub fn with_outputs(
+        config: &ZenohConfig,
+        objects: &[ObjectOutput],
+        ros_time_offset_ns: i64,
+        control: Option<ControlSender>,
+    ) -> Result<Self, ZenohSetupError> {
+        check_object_names(objects)?;
+        let names: Vec<String> = objects.iter().map(|o| o.name.clone()).collect();
         let zconfig = config.to_zenoh_config()?;
         let session = zenoh::open(zconfig)
             .wait()
@@ -98,58 +125,85 @@ impl ZenohPosePublisher {
             namespace: ros2::fully_qualified_topic(&config.node_namespace),
             name: config.node_name.clone(),
         };
-        let congestion = match config.congestion_control {
-            CongestionPolicy::Drop => CongestionControl::Drop,
-            CongestionPolicy::Block => CongestionControl::Block,
-        };
-
-        let declare_token = |key: &str| {
-            session
-                .liveliness()
-                .declare_token(key.to_owned())
-                .wait()
-                .map_err(|e| ZenohSetupError::Declare {
-                    what: "liveliness token",
-                    key: key.to_owned(),
-                    message: e.to_string(),
-                })
+        let options = SendOptions {
+            priority: Priority::RealTime,
+            express: config.express,
+            congestion: match config.congestion_control {
+                CongestionPolicy::Drop => CongestionControl::Drop,
+                CongestionPolicy::Block => CongestionControl::Block,
+            },
         };
         let node_liveliness_key_expr = ros2::node_liveliness_key_expr(&node);
-        let mut tokens = vec![declare_token(&node_liveliness_key_expr)?];
-
+        let mut tokens = vec![declare_token(&session, &node_liveliness_key_expr)?];
+        let mut entity = 0u64;
+        let mut next_entity = || {
+            entity += 1;
+            entity
+        };
         let mut pubs = Vec::with_capacity(objects.len());
-        for (i, name) in objects.iter().enumerate() {
+        for name in &names {
             let topic = config.pose_topic(name);
-            let key_expr = ros2::pose_stamped_key_expr(config.domain_id, &topic);
-            let publisher = session
-                .declare_publisher(key_expr.clone())
-                .priority(Priority::RealTime)
-                .express(config.express)
-                .congestion_control(congestion)
-                .wait()
-                .map_err(|e| ZenohSetupError::Declare {
-                    what: "publisher",
-                    key: key_expr.clone(),
-                    message: e.to_string(),
-                })?;
-            let entity_id = i as u64 + 1;
-            let liveliness_key_expr = ros2::publisher_liveliness_key_expr(
+            pubs.push(RosPublisher::declare(
+                &session,
                 &node,
-                entity_id,
+                next_entity(),
                 &topic,
-                ros2::POSE_STAMPED_TYPE_NAME,
-                ros2::POSE_STAMPED_TYPE_HASH,
-                ros2::DEFAULT_QOS_KEY,
-            );
-            tokens.push(declare_token(&liveliness_key_expr)?);
-            pubs.push(ObjectPublisher {
-                publisher,
-                key_expr,
-                liveliness_key_expr,
-                gid: random_gid(&node.zid, entity_id),
-                next_sequence: 1,
-            });
+                &types::POSE_STAMPED,
+                options,
+                &mut tokens,
+            )?);
         }
+        let mut optional =
+            |on: bool, topic: String, ty| -> Result<Option<RosPublisher>, ZenohSetupError> {
+                on.then(|| {
+                    RosPublisher::declare(
+                        &session,
+                        &node,
+                        next_entity(),
+                        &topic,
+                        ty,
+                        options,
+                        &mut tokens,
+                    )
+                })
+                .transpose()
+            };
+        let tf = optional(config.tf, config.tf_topic.clone(), &types::TF_MESSAGE)?;
+        let detections = optional(
+            config.detections,
+            config.detections_topic(),
+            &types::DETECTION3D_ARRAY,
+        )?;
+        let diagnostics = optional(
+            config.diagnostics,
+            config.diagnostics_topic(),
+            &types::DIAGNOSTIC_ARRAY,
+        )?;
+        let last_control = Arc::new(Mutex::new(vec![None; objects.len()]));
+        let control = match control.filter(|_| config.control) {
+            Some(sender) => Some(commands::declare(
+                &session,
+                &node,
+                next_entity(),
+                config,
+                &names,
+                (sender, last_control.clone()),
+                &mut tokens,
+            )?),
+            None => None,
+        };
+        let outputs = TickOutputs {
+            content: OutputContent {
+                objects: objects.to_vec(),
+                child_frames: names.iter().map(|n| config.tf_child_frame(n)).collect(),
+                frame_id: config.frame_id.clone(),
+                node_name: config.node_name.clone(),
+                last_control,
+            },
+            tf,
+            detections,
+            diagnostics,
+        };
 
         let status_key_expr = config.status_key_expr();
         let status = session
@@ -167,7 +221,7 @@ impl ZenohPosePublisher {
         let query_counters = Arc::new(PoseQueryCounters::default());
         let mut queryables = Vec::new();
         if config.pose_queries {
-            for (object, name) in objects.iter().enumerate() {
+            for (object, name) in names.iter().enumerate() {
                 let key = config.pose_query_key_expr(name);
                 let context = pose_query::QueryContext {
                     name: name.clone(),
@@ -193,6 +247,8 @@ impl ZenohPosePublisher {
         Ok(Self {
             session,
             objects: pubs,
+            outputs,
+            control,
             status,
             status_key_expr,
             node_liveliness_key_expr,
@@ -238,11 +294,30 @@ impl ZenohPosePublisher {
         &self.status_key_expr
     }
 
-    /// The liveliness tokens declared while the sink lives: the node's first, then one per pose publisher.
+    /// The liveliness tokens declared while the sink lives: the node's first, then one per pose publisher, then
+    /// TF, detections and diagnostics (those on), then the control subscriptions and the reset service.
     pub fn liveliness_key_exprs(&self) -> Vec<&str> {
+        let o = &self.outputs;
         std::iter::once(self.node_liveliness_key_expr.as_str())
-            .chain(self.objects.iter().map(|p| p.liveliness_key_expr.as_str()))
+            .chain(self.objects.iter().map(|p| p.token_key.as_str()))
+            .chain(
+                [&o.tf, &o.detections, &o.diagnostics]
+                    .into_iter()
+                    .flatten()
+                    .map(|p| p.token_key.as_str()),
+            )
+            .chain(
+                self.control
+                    .iter()
+                    .flat_map(|c| c.token_keys.iter().map(String::as_str)),
+            )
             .collect()
+    }
+
+    /// The data key expressions of TF, detections and diagnostics (`None` when off).
+    pub fn output_key_exprs(&self) -> [Option<&str>; 3] {
+        let o = &self.outputs;
+        [&o.tf, &o.detections, &o.diagnostics].map(|p| p.as_ref().map(|p| p.key_expr.as_str()))
     }
 
     /// Puts a status document (JSON bytes, built by the runtime) on the status key. Failures are counted in
@@ -283,17 +358,7 @@ impl ZenohPosePublisher {
     }
 
     fn publish_one(&mut self, estimate: &tracker::track::PoseEstimate) -> Result<(), String> {
-        let stamp_ns = estimate
-            .t_us
-            .checked_mul(1000)
-            .and_then(|ns| ns.checked_add(self.ros_time_offset_ns))
-            .ok_or_else(|| {
-                format!(
-                    "pose time {} us + offset overflows i64 nanoseconds",
-                    estimate.t_us
-                )
-            })?;
-        let stamp = RosTime::from_nanos(stamp_ns).map_err(|e| e.to_string())?;
+        let stamp = stamp_of(estimate.t_us, self.ros_time_offset_ns)?;
         let n_objects = self.objects.len();
         let p = self.objects.get_mut(estimate.object).ok_or_else(|| {
             format!(
@@ -302,18 +367,31 @@ impl ZenohPosePublisher {
             )
         })?;
         ros2::encode_pose_stamped_isometry(&mut self.buffer, stamp, &self.frame_id, &estimate.pose);
-        let attachment = Attachment {
-            sequence_number: p.next_sequence,
-            source_timestamp_ns: system_time_ns(),
-            gid: p.gid,
+        p.put(&self.buffer)
+    }
+
+    /// TF, detections and diagnostics of a tick; returns the first failure.
+    fn publish_outputs(&mut self, poses: &TickPoses<'_>) -> Option<String> {
+        let o = &mut self.outputs;
+        let offset = self.ros_time_offset_ns;
+        let mut first_err = None;
+        type Encode = fn(&OutputContent, &TickPoses<'_>, i64, &mut Vec<u8>) -> Result<(), String>;
+        let jobs: [(&mut Option<RosPublisher>, Encode); 3] = [
+            (&mut o.tf, OutputContent::tf),
+            (&mut o.detections, OutputContent::detections),
+            (&mut o.diagnostics, OutputContent::diagnostics),
+        ];
+        for (publisher, encode) in jobs {
+            let Some(publisher) = publisher else {
+                continue;
+            };
+            if let Err(e) = encode(&o.content, poses, offset, &mut self.buffer)
+                .and_then(|()| publisher.put(&self.buffer))
+            {
+                first_err.get_or_insert(e);
+            }
         }
-        .to_bytes();
-        p.next_sequence += 1;
-        p.publisher
-            .put(self.buffer.as_slice())
-            .attachment(attachment)
-            .wait()
-            .map_err(|e| format!("put on {:?}: {e}", p.key_expr))
+        first_err
     }
 }
 
@@ -341,6 +419,10 @@ impl PoseSink for ZenohPosePublisher {
                 }
             }
         }
+        if let Some(e) = self.publish_outputs(poses) {
+            self.counters.failed += 1;
+            first_err.get_or_insert(e);
+        }
         first_err.map_or(Ok(()), |m| Err(transport(m)))
     }
 
@@ -365,26 +447,4 @@ fn transport(message: String) -> PublishError {
         sink: SINK_NAME.into(),
         message,
     }
-}
-
-/// Nanoseconds since the Unix epoch on the system clock (0 if the clock is before 1970, saturated past 2262).
-fn system_time_ns() -> i64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| i64::try_from(d.as_nanos()).unwrap_or(i64::MAX))
-}
-
-/// A random 16-byte GID: std's randomly keyed SipHash (keys seeded from the OS) over the session id, the entity id
-/// and the time, as rmw_zenoh's publishers draw theirs at random.
-fn random_gid(zid: &str, entity_id: u64) -> [u8; ros2::GID_LEN] {
-    let mut gid = [0u8; ros2::GID_LEN];
-    for (half, chunk) in gid.chunks_mut(8).enumerate() {
-        let mut h = std::collections::hash_map::RandomState::new().build_hasher();
-        h.write(zid.as_bytes());
-        h.write_u64(entity_id);
-        h.write_usize(half);
-        h.write_i64(system_time_ns());
-        chunk.copy_from_slice(&h.finish().to_le_bytes());
-    }
-    gid
 }

@@ -1,5 +1,6 @@
 //! Tests of the zenoh sink's configuration and publishing.
 
+use super::entity::random_gid;
 use super::*;
 
 #[test]

@@ -187,6 +187,19 @@ impl TickEngine {
         }
     }
 
+    /// Re-seeds object `k` at `pose` as of `t_us` ([`crate::track::PoseTracker::reseed`]): its estimate is replaced
+    /// and its motion forgotten; `false` for an unknown object.
+    pub fn reseed(&mut self, k: usize, t_us: i64, pose: Isometry3<f64>) -> bool {
+        let Some(o) = self.objects.get_mut(k) else {
+            return false;
+        };
+        o.state.reset(t_us, pose);
+        o.state.velocity = nalgebra::Vector6::zeros();
+        o.state.previous = None;
+        self.renderers.forget_prefetched();
+        true
+    }
+
     /// Starts each object's render for the next tick, at the times it may come ([`NextTick::candidates`]), unless
     /// the tracker refines only at depth frames ([`crate::track::ExecutionConfig::prefetch_renders`]).
     pub fn prefetch_renders(&mut self) {

@@ -249,4 +249,19 @@ impl PoseTracker for EventTrack6d {
     fn pose_at(&self, object: usize, t_us: i64) -> Option<PoseEstimate> {
         self.engine.pose_at(object, t_us)
     }
+
+    fn reseed(&mut self, object: usize, t_us: i64, pose: Isometry3<f64>) -> Result<(), String> {
+        if !crate::track::hold::is_finite(&pose) {
+            return Err("the pose is not finite".into());
+        }
+        if !self.engine.reseed(object, t_us, pose) {
+            return Err(format!("no object {object}"));
+        }
+        if let Some(r) = self.retrack.as_mut() {
+            r.forget_all();
+        }
+        self.deferred = Deferred::No;
+        self.prepared = false;
+        Ok(())
+    }
 }

@@ -110,6 +110,12 @@ impl Retrack {
         self.log.forget_before(position);
     }
 
+    /// Forgets every saved state, tick and logged event (after a re-seed, nothing before it may come back).
+    pub(super) fn forget_all(&mut self) {
+        self.forget_from(i64::MIN);
+        self.log.forget_before(self.log.end());
+    }
+
     /// Forgets the states and ticks at or after `t_us`.
     fn forget_from(&mut self, t_us: i64) {
         while self.states.back().is_some_and(|s| s.tick.t_us >= t_us) {
