@@ -132,6 +132,7 @@ enum Command {
         seed: u64,
     },
     UsbCamera(hil_sim::usb_camera::args::UsbCameraArgs),
+    Ros2Play(hil_sim::ros2_play::args::Ros2PlayArgs),
     /// Print the command reference (docs/commands-hil-sim.md) as Markdown, from these commands' own help texts.
     #[command(hide = true)]
     Reference,
@@ -169,6 +170,7 @@ fn main() -> ExitCode {
         }
         Command::Suite { name, out, jobs } => run_suite(&name, &out, jobs),
         Command::UsbCamera(args) => args.options().and_then(|o| hil_sim::usb_camera::serve(&o)),
+        Command::Ros2Play(args) => ros2_play(&args),
         Command::Preview { dir, at, out } => {
             let out = out.unwrap_or_else(|| dir.join("preview"));
             hil_sim::preview::write_previews(&dir, &at, &out)
@@ -235,6 +237,23 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn ros2_play(args: &hil_sim::ros2_play::args::Ros2PlayArgs) -> anyhow::Result<()> {
+    let options = args.options()?;
+    let s = hil_sim::ros2_play::play(&options)?;
+    eprintln!(
+        "ros2-play: published {} event packets ({} bytes) and {} depth frames ({} stamped by the schedule), \
+         {:.3} s of stream in {:.3} s; stamp offset {} ns",
+        s.packets,
+        s.bytes,
+        s.depth_frames,
+        s.depth_from_schedule,
+        s.stream_seconds,
+        s.wall_seconds,
+        s.stamp_offset_ns
+    );
+    Ok(())
 }
 
 fn run_suite(name: &str, out: &std::path::Path, jobs: Option<u32>) -> anyhow::Result<()> {
