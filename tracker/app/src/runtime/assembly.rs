@@ -88,6 +88,12 @@ pub(super) struct StreamAssembler<'a> {
     transport: DepthTransport,
     /// Frames exposed but not yet delivered (exposure time, arrival time, frame), oldest first.
     in_transit: VecDeque<(i64, i64, Box<DepthFrame>)>,
+    /// Depth from a stamped source ([`Self::offer_depth`]) instead of a recording.
+    stamped_depth: bool,
+    /// Stamped frames waiting for their phase-coded pulse: (time on the event camera's clock, frame).
+    offered: VecDeque<(i64, Box<DepthFrame>)>,
+    /// The rising edge of the latest phase-coded pulse closed (stamped depth).
+    last_wide_rise: Option<i64>,
     stats: SourceStats,
     /// Stream time after which nothing more is delivered (first event plus the run's length), once known.
     end_us: Option<i64>,
@@ -105,6 +111,10 @@ impl StreamAssembler<'_> {
     /// pulse is missing, and the trigger clock's drift against the nominal rate never adds up. The frame of a
     /// missing phase-coded pulse goes out at the first pulse after its time, stamped by that schedule.
     fn expose_depth_until(&mut self, rise: i64, wide: bool) {
+        if self.stamped_depth {
+            self.match_offered(rise, wide);
+            return;
+        }
         let half_tick = (self.tick_period_us * 0.5) as i64;
         if wide {
             let n = match self.depth_anchor {
@@ -128,6 +138,52 @@ impl StreamAssembler<'_> {
                 && due <= rise + half_tick
             {
                 self.send_depth(self.next_frame, due);
+            }
+        }
+    }
+
+    /// Stamped depth at the falling edge of the pulse that rose at `rise`: frames stamped more than half a depth
+    /// period before it (their pulse is missing) go out at their own time; at a phase-coded pulse, the frame
+    /// stamped within half a depth period of it goes out exposed at its rising edge.
+    fn match_offered(&mut self, rise: i64, wide: bool) {
+        let half = (self.depth_period_us * 0.5) as i64;
+        while let Some((t, _)) = self.offered.front()
+            && *t < rise - half
+            && let Some((t, frame)) = self.offered.pop_front()
+        {
+            self.stats.depth_missing += 1;
+            self.deliver_offered(t, frame);
+        }
+        if wide {
+            if let Some((t, _)) = self.offered.front()
+                && (*t - rise).abs() <= half
+                && let Some((_, frame)) = self.offered.pop_front()
+            {
+                self.deliver_offered(rise, frame);
+            }
+            self.last_wide_rise = Some(rise);
+        }
+    }
+
+    fn deliver_offered(&mut self, exposed: i64, frame: Box<DepthFrame>) {
+        self.stats.depth_frames += 1;
+        self.out.depth(exposed, frame);
+    }
+
+    /// A depth frame from a stamped source (ROS 2), exposed at `t_us` on the event camera's clock as far as its
+    /// stamp tells: it goes out exposed at the rising edge of its phase-coded pulse, at that pulse's falling edge,
+    /// or at once if that pulse has passed (a late frame, which the tracker tracks again from).
+    pub(super) fn offer_depth(&mut self, t_us: i64, frame: Box<DepthFrame>) {
+        let half = (self.depth_period_us * 0.5) as i64;
+        match self.last_wide_rise {
+            Some(r) if t_us <= r + half => {
+                self.flush();
+                let exposed = if (t_us - r).abs() <= half { r } else { t_us };
+                self.deliver_offered(exposed, frame);
+            }
+            _ => {
+                let at = self.offered.partition_point(|(t, _)| *t <= t_us);
+                self.offered.insert(at, (t_us, frame));
             }
         }
     }
@@ -279,11 +335,21 @@ impl<'a> StreamAssembler<'a> {
             depth_done: false,
             transport,
             in_transit: VecDeque::with_capacity(16),
+            stamped_depth: false,
+            offered: VecDeque::new(),
+            last_wide_rise: None,
             stats: SourceStats::default(),
             end_us: None,
             limit_us: 0,
             reached_end: false,
         }
+    }
+
+    /// The same assembler taking its depth frames from [`Self::offer_depth`] (a stamped source) rather than a
+    /// recording.
+    pub(super) fn with_stamped_depth(mut self) -> Self {
+        self.stamped_depth = true;
+        self
     }
 
     /// The same assembler delivering only the first `seconds` of stream time (0: all of it).
@@ -343,7 +409,7 @@ impl<'a> StreamAssembler<'a> {
     /// Ends the stream: the last batch goes out; returns what was delivered (frames still in transit counted).
     pub(super) fn finish(mut self) -> SourceStats {
         self.flush();
-        self.stats.depth_in_transit = self.in_transit.len() as u64;
+        self.stats.depth_in_transit = (self.in_transit.len() + self.offered.len()) as u64;
         self.stats
     }
 }

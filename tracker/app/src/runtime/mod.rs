@@ -24,6 +24,7 @@ pub mod queue;
 pub mod recorder;
 pub mod replay;
 mod revision;
+pub mod ros2;
 pub mod setup;
 pub mod sinks;
 pub mod source;
@@ -135,12 +136,14 @@ pub fn run(config: &Config, hooks: Hooks) -> Result<Summary, RuntimeError> {
         status_period: Duration::from_millis(config.status.period_ms),
         // A live camera's overload buffer is the transfer ring at the USB side (dropping, counted): the
         // ingest queue waits for room behind it.
-        wait_for_room: config.source.pace == Pace::Fast || config.source.kind == SourceKind::Live,
+        wait_for_room: config.source.pace == Pace::Fast
+            || matches!(config.source.kind, SourceKind::Live | SourceKind::Ros2),
         rt_priority: config.tracker.realtime_priority,
         latency_log,
         // Holding a frame compares the stream's clock with the wall clock: only where they run together.
         defer_depth: config.tracker.defer_late_depth
-            && (config.source.kind == SourceKind::Live || config.source.pace == Pace::Realtime),
+            && (matches!(config.source.kind, SourceKind::Live | SourceKind::Ros2)
+                || config.source.pace == Pace::Realtime),
         // A frame within half a tick of its own tick is used whatever its age.
         depth_age_limit_ms: (config.tracker.method != "static").then(|| {
             config

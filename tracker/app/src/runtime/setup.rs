@@ -122,7 +122,7 @@ fn build_eventtrack6d(
         .map_err(|e| RuntimeError::Tracker(e.to_string()))
 }
 
-fn pose_of(o: &ObjectConfig) -> Isometry3<f64> {
+pub(super) fn pose_of(o: &ObjectConfig) -> Isometry3<f64> {
     let [x, y, z, w] = o.orientation;
     Isometry3::from_parts(
         Translation3::new(o.position[0], o.position[1], o.position[2]),
@@ -242,6 +242,7 @@ pub fn build_source(
             Ok((Box::new(source), scene, timeline))
         }
         SourceKind::Live => build_live_source(config),
+        SourceKind::Ros2 => super::ros2::connect(config),
     }
 }
 

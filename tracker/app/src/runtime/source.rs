@@ -65,6 +65,8 @@ pub struct SourceStats {
     pub stopped: bool,
     /// The USB side of a live camera (`None` for a replay).
     pub usb: Option<UsbStats>,
+    /// What the ROS 2 source received (`None` for other sources).
+    pub ros2: Option<super::ros2::Ros2Stats>,
 }
 
 /// What the USB side of a live camera did: the data path's counters and the camera's outages.

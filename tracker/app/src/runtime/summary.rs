@@ -209,6 +209,26 @@ impl std::fmt::Display for Summary {
                 writeln!(f, "usb error:       {e}")?;
             }
         }
+        if let Some(r) = &self.source_stats.ros2 {
+            let unusable: Vec<String> =
+                r.unusable.iter().map(|(k, n)| format!("{k} {n}")).collect();
+            writeln!(
+                f,
+                "ros2:            {} event packets ({} bytes), {} missing, {} out of order; {} depth images, {} \
+                 CameraInfo; unusable: {}",
+                r.packets,
+                r.bytes,
+                r.packets_missing,
+                r.packets_out_of_order,
+                r.depth_images,
+                r.camera_infos,
+                if unusable.is_empty() {
+                    "none".to_owned()
+                } else {
+                    unusable.join(", ")
+                }
+            )?;
+        }
         if !self.source_stats.anomalies.is_empty() {
             let a: Vec<String> = self
                 .source_stats

@@ -45,12 +45,14 @@ pub fn unused_tables(config: &Config, text: &str) -> Vec<String> {
         ("demo", config.source.kind == SourceKind::Demo),
         ("replay", config.source.kind == SourceKind::Replay),
         ("live", config.source.kind == SourceKind::Live),
+        ("ros2", config.source.kind == SourceKind::Ros2),
     ] {
         if !used && doc.contains_key(table) {
             unused.push(format!("[{table}] is not used: [source] kind is `{kind}`"));
         }
     }
-    if !config.sinks.zenoh && doc.contains_key("zenoh") {
+    // The ROS 2 source reads [zenoh]'s mode, scouting and domain id.
+    if !config.sinks.zenoh && config.source.kind != SourceKind::Ros2 && doc.contains_key("zenoh") {
         unused.push("[zenoh] is not used: [sinks] zenoh is false".into());
     }
     let can_keys = doc
@@ -79,8 +81,14 @@ pub fn resolve_paths(config: &mut Config, base: &Path) {
             join(r);
         }
     }
+    if let Some(r) = &mut config.ros2 {
+        join(&mut r.calibration);
+    }
     for o in &mut config.objects {
         join(&mut o.mesh);
+        if let Some(m) = &mut o.models_info {
+            join(m);
+        }
     }
     join(&mut config.output.dir);
 }

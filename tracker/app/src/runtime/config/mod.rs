@@ -87,6 +87,9 @@ pub struct Config {
     /// The live rig (`source.kind = "live"`).
     #[serde(default)]
     pub live: Option<LiveConfig>,
+    /// The sensors through ROS 2 over rmw_zenoh (`source.kind = "ros2"`).
+    #[serde(default)]
+    pub ros2: Option<Ros2SourceConfig>,
     /// The pose tracker.
     #[serde(default)]
     pub tracker: TrackerConfig,
@@ -125,6 +128,8 @@ pub enum SourceKind {
     Replay,
     /// The real rig: EVK4 + D435i + trigger MCU (`[live]`).
     Live,
+    /// The sensors' ROS 2 drivers over rmw_zenoh: EventPacket, depth Image and CameraInfo topics (`[ros2]`).
+    Ros2,
 }
 
 impl SourceKind {
@@ -134,6 +139,7 @@ impl SourceKind {
             Self::Demo => "demo",
             Self::Replay => "replay",
             Self::Live => "live",
+            Self::Ros2 => "ros2",
         }
     }
 }
@@ -329,6 +335,10 @@ pub struct ObjectConfig {
     pub position: [f64; 3],
     /// First pose: quaternion `(x, y, z, w)`.
     pub orientation: [f64; 4],
+    /// A BOP-style `models_info.json` (keyed by object name, as in a recording's `models/`) giving the object's
+    /// diameter and symmetries. Default: a replayed recording's entry, else the mesh's diameter and no symmetry.
+    #[serde(default)]
+    pub models_info: Option<PathBuf>,
 }
 
 /// `[queue]`: ingest -> tracker thread.
@@ -410,8 +420,10 @@ pub const DEFAULT_CONFIG_TOML: &str = include_str!("../../../../../config/defaul
 
 mod load;
 mod reference;
+mod ros2;
 mod validate;
 pub mod validate_live;
+pub use ros2::Ros2SourceConfig;
 
 pub use load::{builtin_default, from_toml, load, resolve_paths, unused_tables};
 pub use reference::reference_markdown;

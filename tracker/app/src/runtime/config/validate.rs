@@ -20,7 +20,7 @@ pub fn validate(config: &Config, origin: &str) -> Result<(), ConfigError> {
         if !(latency.is_finite() && (0.0..=1000.0).contains(&latency)) {
             return Err(bad(key, format!("{latency} is out of range: 0 to 1000 ms")));
         }
-        if latency > 0.0 && config.source.kind == SourceKind::Live {
+        if latency > 0.0 && matches!(config.source.kind, SourceKind::Live | SourceKind::Ros2) {
             return Err(bad(
                 key,
                 "simulates a depth camera's transport latency on replay; a live source has its own (set it \
@@ -101,6 +101,22 @@ pub fn validate(config: &Config, origin: &str) -> Result<(), ConfigError> {
                     "objects",
                     "a live rig needs at least one [[objects]] entry (name, mesh, first pose)"
                         .into(),
+                ));
+            }
+        }
+        SourceKind::Ros2 => {
+            let Some(r) = &config.ros2 else {
+                return Err(bad(
+                    "ros2",
+                    "source.kind = \"ros2\" needs a [ros2] table with `calibration` (see docs/zenoh-ros2.md)"
+                        .into(),
+                ));
+            };
+            r.validate(origin)?;
+            if config.objects.is_empty() {
+                return Err(bad(
+                    "objects",
+                    "the ROS 2 source needs at least one [[objects]] entry (name, mesh, first pose)".into(),
                 ));
             }
         }
@@ -272,6 +288,27 @@ pub fn check_files(config: &Config, origin: &str) -> Result<(), ConfigError> {
             "calibration file",
             &l.calibration,
         ));
+    }
+    if config.source.kind == SourceKind::Ros2
+        && let Some(r) = &config.ros2
+        && !r.calibration.is_file()
+    {
+        return Err(missing(
+            "ros2.calibration".into(),
+            "calibration file",
+            &r.calibration,
+        ));
+    }
+    for (i, o) in config.objects.iter().enumerate() {
+        if let Some(m) = &o.models_info
+            && !m.is_file()
+        {
+            return Err(missing(
+                format!("objects[{i}].models_info"),
+                "models_info.json",
+                m,
+            ));
+        }
     }
     if config.source.kind == SourceKind::Live
         && let Some(r) = config

@@ -1,0 +1,193 @@
+//! The ROS 2 source end to end: `hil-sim ros2-play` publishes a generated recording as metavision_driver and
+//! realsense-ros would (EventPacket slices of 1 ms, depth Image and CameraInfo at 30 Hz, rmw_zenoh keys), the
+//! runtime reads them through `[source] kind = "ros2"`, and the poses are the offline tracker's on the same
+//! recording, bit for bit (nothing is dropped on loopback with the player's blocking publishers).
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use eventtrack6d::runtime::setup::recording_scene;
+use eventtrack6d::runtime::{self, Hooks, build_tracker};
+use eventtrack6d_tests::tick_fixture::mug_and_can_recording;
+use hil_sim::ros2_play::{Pace, Ros2PlayOptions, SessionMode, SessionOptions, Topics, play};
+use scene::render::RendererKind;
+use std::net::TcpListener;
+use std::time::Duration;
+use tracker::recording::{PoseRow, parse_pose_csv};
+use tracker::track::{OfflineTiming, TrackerConfig, track_recording_timed};
+
+fn free_port() -> u16 {
+    let l = TcpListener::bind("127.0.0.1:0").unwrap();
+    l.local_addr().unwrap().port()
+}
+
+#[test]
+fn ros2_play_into_the_ros2_source_gives_the_offline_poses_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec_dir = dir.path().join("rec");
+    let rec = mug_and_can_recording(&rec_dir);
+
+    // The objects at their ground-truth poses at the first tick, as configured objects (what a ROS 2 user gives).
+    let gt_scene = recording_scene(&rec, &[]).unwrap();
+    let mut objects_toml = String::new();
+    for o in &gt_scene.objects {
+        let t = o.first_pose.1.translation.vector;
+        let q = o.first_pose.1.rotation.coords;
+        objects_toml.push_str(&format!(
+            "[[objects]]\nname = \"{}\"\nmesh = \"{}\"\nposition = [{:?}, {:?}, {:?}]\norientation = [{:?}, {:?}, {:?}, {:?}]\n\
+             models_info = \"{}\"\n",
+            o.name,
+            o.mesh.display(),
+            t.x,
+            t.y,
+            t.z,
+            q.x,
+            q.y,
+            q.z,
+            q.w,
+            rec_dir.join("models").join("models_info.json").display()
+        ));
+    }
+    let s = rec.meta.trigger;
+    let port = free_port();
+    let out_dir = dir.path().join("out");
+    let toml = format!(
+        r#"
+[source]
+kind = "ros2"
+[ros2]
+calibration = "{}"
+listen = ["tcp/127.0.0.1:{port}"]
+connect = []
+trigger_channel = {}
+tick_rate_hz = {:?}
+ticks_per_depth = {}
+narrow_width_us = {}
+wide_width_us = {}
+wait_for_data_s = 120
+end_after_idle_s = 2
+[tracker]
+method = "eventtrack6d"
+[output]
+dir = "{}"
+[queue]
+batch_us = 53
+[sinks]
+csv = true
+zenoh = false
+[can]
+enabled = false
+{objects_toml}"#,
+        rec_dir.join("camera.json").display(),
+        s.channel,
+        s.tick_rate_hz,
+        s.ticks_per_depth,
+        s.narrow_width_us,
+        s.wide_width_us,
+        out_dir.display(),
+    );
+    let config = runtime::config::from_toml(&toml, "ros2.toml").unwrap();
+
+    // Offline, on the same configured objects.
+    let scene = recording_scene(&rec, &config.objects).unwrap();
+    let mut tracker = build_tracker(
+        "eventtrack6d",
+        RendererKind::Cpu,
+        &TrackerConfig::default(),
+        &scene,
+        &s.timeline_config(),
+    )
+    .unwrap();
+    let names = tracker.objects().to_vec();
+    let mut offline = Vec::new();
+    let timing = OfflineTiming {
+        start_us: scene.objects[0].first_pose.0,
+        depth_latency_us: 0,
+        depth_jitter_us: 0,
+    };
+    let stats = track_recording_timed(
+        &rec,
+        tracker.as_mut(),
+        timing,
+        |_, estimates, _| {
+            offline.extend(estimates.iter().map(|e| {
+                PoseRow {
+                    t_us: e.t_us,
+                    object: &names[e.object],
+                    pose: &e.pose,
+                    quality: e.quality,
+                    state: e.state.as_str(),
+                }
+                .to_string()
+            }));
+        },
+        |_| {},
+    )
+    .unwrap();
+    assert!(stats.depth_frames >= 11, "{stats:?}");
+
+    // The runtime waits for the first pulse on the ROS 2 topics; the player waits for its subscription.
+    let runner = std::thread::spawn(move || runtime::run(&config, Hooks::default()));
+    let offset_ns = 1_700_000_000_000_000_000i64;
+    let options = Ros2PlayOptions {
+        recording: rec_dir.clone(),
+        pace: Pace::Fast,
+        slice_us: 1000,
+        depth_latency_us: 0,
+        session: SessionOptions {
+            mode: SessionMode::Peer,
+            connect: vec![format!("tcp/127.0.0.1:{port}")],
+            listen: Vec::new(),
+        },
+        domain_id: 0,
+        topics: Topics {
+            events: "/event_camera/events".into(),
+            depth_image: "/camera/camera/depth/image_rect_raw".into(),
+            camera_info: "/camera/camera/depth/camera_info".into(),
+            event_frame_id: "event_camera_optical_frame".into(),
+            depth_frame_id: "camera_depth_optical_frame".into(),
+        },
+        stamp_offset_ns: Some(offset_ns),
+        wait_for_subscriber: Duration::from_secs(120),
+        progress: false,
+    };
+    let played = play(&options).expect("ros2-play");
+    let summary = runner.join().unwrap().expect("the ROS 2 run failed");
+
+    let ros2 = summary.source_stats.ros2.clone().expect("ROS 2 counters");
+    assert_eq!(ros2.packets, played.packets, "{summary}");
+    assert_eq!(ros2.bytes, played.bytes);
+    assert_eq!((ros2.packets_missing, ros2.packets_out_of_order), (0, 0));
+    assert!(ros2.unusable.is_empty(), "{:?}", ros2.unusable);
+    assert_eq!(ros2.depth_images, played.depth_frames);
+    assert_eq!(ros2.camera_infos, played.depth_frames);
+    // The stamps' offset, estimated from the packets, is the player's to within a packet's first event.
+    let estimated = ros2.clock_offset_ns.unwrap();
+    assert!(
+        (offset_ns - 1_000_000..=offset_ns).contains(&estimated),
+        "{estimated}"
+    );
+    assert_eq!(summary.source_stats.depth_frames, stats.depth_frames);
+    assert!(
+        summary.to_string().contains("ros2:            "),
+        "{summary}"
+    );
+
+    let csv = std::fs::read_to_string(summary.outputs.csv.clone().unwrap()).unwrap();
+    let received: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(received.len(), offline.len());
+    let moving = parse_pose_csv(&csv)
+        .unwrap()
+        .windows(4)
+        .any(|w| (w[0].pose.translation.vector - w[2].pose.translation.vector).norm() > 1e-3);
+    assert!(
+        moving,
+        "the scene must move for the comparison to mean anything"
+    );
+    for (r, o) in received.iter().zip(&offline) {
+        assert_eq!(
+            *r, o,
+            "the ROS 2 run's estimate differs from the offline one"
+        );
+    }
+    assert_eq!(summary.tracker, tracker.tracker_counters());
+}
