@@ -5,6 +5,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+use eventtrack6d::runtime::ros2::{PlaybackEndpoints, playback_config};
 use eventtrack6d::runtime::setup::recording_scene;
 use eventtrack6d::runtime::{self, Hooks, build_tracker};
 use eventtrack6d_tests::tick_fixture::mug_and_can_recording;
@@ -26,66 +27,22 @@ fn ros2_play_into_the_ros2_source_gives_the_offline_poses_exactly() {
     let rec_dir = dir.path().join("rec");
     let rec = mug_and_can_recording(&rec_dir);
 
-    // The objects at their ground-truth poses at the first tick, as configured objects (what a ROS 2 user gives).
-    let gt_scene = recording_scene(&rec, &[]).unwrap();
-    let mut objects_toml = String::new();
-    for o in &gt_scene.objects {
-        let t = o.first_pose.1.translation.vector;
-        let q = o.first_pose.1.rotation.coords;
-        objects_toml.push_str(&format!(
-            "[[objects]]\nname = \"{}\"\nmesh = \"{}\"\nposition = [{:?}, {:?}, {:?}]\norientation = [{:?}, {:?}, {:?}, {:?}]\n\
-             models_info = \"{}\"\n",
-            o.name,
-            o.mesh.display(),
-            t.x,
-            t.y,
-            t.z,
-            q.x,
-            q.y,
-            q.z,
-            q.w,
-            rec_dir.join("models").join("models_info.json").display()
-        ));
-    }
+    // The configuration `eventtrack6d ros2-config` writes: the recording's calibration and schedule, its objects
+    // at their ground-truth poses at the first tick as configured objects (what a ROS 2 user gives).
     let s = rec.meta.trigger;
     let port = free_port();
     let out_dir = dir.path().join("out");
-    let toml = format!(
-        r#"
-[source]
-kind = "ros2"
-[ros2]
-calibration = "{}"
-listen = ["tcp/127.0.0.1:{port}"]
-connect = []
-trigger_channel = {}
-tick_rate_hz = {:?}
-ticks_per_depth = {}
-narrow_width_us = {}
-wide_width_us = {}
-wait_for_data_s = 120
-end_after_idle_s = 2
-[tracker]
-method = "eventtrack6d"
-[output]
-dir = "{}"
-[queue]
-batch_us = 53
-[sinks]
-csv = true
-zenoh = false
-[can]
-enabled = false
-{objects_toml}"#,
-        rec_dir.join("camera.json").display(),
-        s.channel,
-        s.tick_rate_hz,
-        s.ticks_per_depth,
-        s.narrow_width_us,
-        s.wide_width_us,
-        out_dir.display(),
-    );
-    let config = runtime::config::from_toml(&toml, "ros2.toml").unwrap();
+    let endpoints = PlaybackEndpoints {
+        connect: Vec::new(),
+        listen: vec![format!("tcp/127.0.0.1:{port}")],
+    };
+    let toml = playback_config(&rec, &endpoints, &out_dir).unwrap();
+    let mut config = runtime::config::from_toml(&toml, "ros2.toml").unwrap();
+    assert_eq!(config.objects.len(), 2, "{toml}");
+    config.ros2.as_mut().unwrap().wait_for_data_s = 120.0;
+    config.sinks.zenoh = false;
+    // Small event batches, so that batch edges fall everywhere.
+    config.queue.batch_us = 53;
 
     // Offline, on the same configured objects.
     let scene = recording_scene(&rec, &config.objects).unwrap();

@@ -11,6 +11,7 @@ mod inspect;
 mod paths;
 mod progress;
 mod record;
+mod ros2_config;
 mod run;
 mod session;
 mod track;
@@ -37,6 +38,7 @@ enum Command {
     Convert(convert::ConvertArgs),
     Devices(devices::DevicesArgs),
     Record(record::RecordArgs),
+    Ros2Config(ros2_config::Ros2ConfigArgs),
     /// Print the command reference (docs/commands.md) as Markdown, from these commands' own help texts.
     #[command(hide = true)]
     Reference,
@@ -57,6 +59,7 @@ fn main() -> ExitCode {
         Command::Convert(args) => convert::run(&args),
         Command::Devices(args) => devices::run(&args),
         Command::Record(args) => record::run(&args),
+        Command::Ros2Config(args) => ros2_config::run(&args),
         Command::Eval(args) => evaluate::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Run(args) => run::run(&args),

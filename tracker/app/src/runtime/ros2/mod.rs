@@ -7,8 +7,10 @@
 
 mod clock;
 mod inputs;
+mod playback;
 mod startup;
 
+pub use playback::{PlaybackEndpoints, playback_config};
 pub use startup::connect;
 
 use super::assembly::StreamAssembler;
@@ -227,5 +229,157 @@ impl Source for Ros2Source {
             }
         }
         Ok(stats)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::runtime::queue::{Ingest, IngestQueue};
+    use drivers::event::{CdEvent, TriggerEdge};
+    use drivers::formats::evt3::Evt3Encoder;
+    use std::sync::Arc;
+
+    /// Two depth periods of tick pulses (every fourth one wide) with a CD event after each, as EVT3 bytes.
+    fn stream(s: &TriggerSchedule) -> (Vec<u8>, Vec<i64>) {
+        let period = (1e6 / s.tick_rate_hz).round() as i64;
+        let (mut cd, mut edges, mut wide_rises) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..12i64 {
+            let rise = 10_000 + k * period;
+            let wide = k % i64::from(s.ticks_per_depth) == 0;
+            let width = if wide {
+                s.wide_width_us
+            } else {
+                s.narrow_width_us
+            };
+            if wide {
+                wide_rises.push(rise);
+            }
+            edges.push(TriggerEdge {
+                t_us: rise,
+                channel: s.channel,
+                rising: true,
+            });
+            edges.push(TriggerEdge {
+                t_us: rise + width,
+                channel: s.channel,
+                rising: false,
+            });
+            cd.push(CdEvent {
+                t_us: rise + width + 100,
+                x: 5,
+                y: 6,
+                polarity: true,
+            });
+        }
+        let mut bytes = Vec::new();
+        Evt3Encoder::new().encode(&cd, &edges, &mut bytes).unwrap();
+        (bytes, wide_rises)
+    }
+
+    #[test]
+    fn gaps_reorderings_and_unusable_samples_are_counted_and_depth_lands_on_its_pulse() {
+        let s = TriggerSchedule::default();
+        let (bytes, wide_rises) = stream(&s);
+        let queue = Arc::new(IngestQueue::new(1024, 64));
+        let out = SourceOutput::new(queue.clone(), true);
+        let stop = StopFlag::new();
+        let assembler = StreamAssembler::new(
+            &out,
+            None,
+            s,
+            false,
+            (64, 1000),
+            DepthTransport::default(),
+            &stop,
+        )
+        .with_stamped_depth();
+        let depth_camera = CameraIntrinsics {
+            width: 2,
+            height: 1,
+            fx: 1.0,
+            fy: 1.0,
+            cx: 0.5,
+            cy: 0.5,
+            distortion: Vec::new(),
+        };
+        let mut r = Reading {
+            assembler,
+            decoder: Evt3Decoder::new(None),
+            chunk: EventBuffer::new(),
+            clock: ClockOffset::default(),
+            waiting_depth: Vec::new(),
+            last_seq: None,
+            stats: Ros2Stats::default(),
+            depth_camera,
+        };
+        let offset_ns = 1_000_000_000_000i64;
+        let frame = || {
+            Box::new(DepthFrame {
+                index: 0,
+                width: 2,
+                height: 1,
+                depth_m: vec![1.0, 2.0],
+            })
+        };
+        // A frame before any packet waits for the clock; it belongs to the second phase-coded pulse.
+        r.take(
+            Ros2Input::Depth {
+                stamp_ns: offset_ns + 300_000 + wide_rises[1] * 1000 + 700_000,
+                frame: frame(),
+            },
+            &stop,
+        );
+        let cut = (bytes.len() / 2) & !1;
+        // The first packet arrives 0.3 ms after its first event (at 10 ms), the others much later.
+        let events = |seq, part: &[u8], stamp_ns| Ros2Input::Events {
+            seq,
+            stamp_ns,
+            bytes: part.to_vec(),
+        };
+        r.take(events(7, &bytes[..cut], offset_ns + 10_300_000), &stop);
+        r.take(events(7, &bytes[..cut], offset_ns + 10_300_000), &stop);
+        r.take(events(8, &bytes[cut..], offset_ns + 900_000_000), &stop);
+        r.take(events(10, &[], offset_ns + 900_000_000), &stop);
+        r.take(
+            Ros2Input::Unusable {
+                kind: "events: encoding".into(),
+                message: "mono".into(),
+            },
+            &stop,
+        );
+        r.take(
+            Ros2Input::Unusable {
+                kind: "events: encoding".into(),
+                message: "mono".into(),
+            },
+            &stop,
+        );
+        let stats = r.stats.clone();
+        assert_eq!(
+            (
+                stats.packets,
+                stats.packets_out_of_order,
+                stats.packets_missing
+            ),
+            (3, 1, 1)
+        );
+        assert_eq!(stats.unusable.get("events: encoding"), Some(&2));
+        assert_eq!(stats.unusable.get("events: out of order"), Some(&1));
+        assert_eq!(stats.unusable.get("events: gap"), Some(&1));
+        assert_eq!(stats.depth_images, 1);
+        // The smallest delay between a packet's first event and its stamp.
+        assert_eq!(stats.clock_offset_ns, Some(offset_ns + 300_000));
+        let mut depth_at = Vec::new();
+        let mut rising = 0;
+        while let Some(item) = queue.pop(Duration::ZERO) {
+            match item {
+                Ingest::Depth { t_us, .. } => depth_at.push((t_us, rising)),
+                Ingest::Trigger { edge, .. } if edge.rising => rising += 1,
+                _ => {}
+            }
+        }
+        // Exposed at the second phase-coded pulse's rising edge, handed over before the next pulse's.
+        assert_eq!(depth_at, vec![(wide_rises[1], 5)]);
     }
 }
