@@ -193,21 +193,24 @@ CRATES = {
     "eventtrack6d_tests": "tests/src/lib.rs",
     "cli_reference": "tools/cli-reference/src/lib.rs",
     "usbip": "usbip/src/lib.rs",
+    "ros2": "ros2/src/lib.rs",
 }
 
 # Which of the workspace's packages each package may depend on (normal dependencies; DESIGN.md section 2,
-# docs/architecture.md): drivers <- scene <- core <- eval, app; hil-sim <- drivers, scene, usbip; tests may use all.
+# docs/architecture.md): drivers <- scene <- core <- eval, app; hil-sim <- drivers, scene, usbip, ros2; app <- ros2;
+# tests may use all.
 ALLOWED = {
     "eventtrack6d-drivers": set(),
     "eventtrack6d-scene": set(),
     "eventtrack6d-core": {"drivers", "scene"},
     "eventtrack6d-eval": {"drivers", "scene", "tracker"},
-    "eventtrack6d": {"drivers", "scene", "tracker", "eval", "cli-reference"},
-    "hil-sim": {"drivers", "scene", "cli-reference", "usbip"},
+    "eventtrack6d": {"drivers", "scene", "tracker", "eval", "cli-reference", "ros2"},
+    "hil-sim": {"drivers", "scene", "cli-reference", "usbip", "ros2"},
     "firmware-trigger": set(),
     "eventtrack6d-tests": None,  # anything
     "cli-reference": set(),
     "eventtrack6d-usbip": set(),
+    "eventtrack6d-ros2": set(),
 }
 MANIFESTS = {
     "eventtrack6d-drivers": "drivers/Cargo.toml",
@@ -220,8 +223,9 @@ MANIFESTS = {
     "eventtrack6d-tests": "tests/Cargo.toml",
     "cli-reference": "tools/cli-reference/Cargo.toml",
     "eventtrack6d-usbip": "usbip/Cargo.toml",
+    "eventtrack6d-ros2": "ros2/Cargo.toml",
 }
-OURS = {"drivers", "scene", "tracker", "eval", "eventtrack6d", "hil-sim", "firmware-trigger", "cli-reference", "usbip"}
+OURS = {"drivers", "scene", "tracker", "eval", "eventtrack6d", "hil-sim", "firmware-trigger", "cli-reference", "usbip", "ros2"}
 
 
 def crate_violations():

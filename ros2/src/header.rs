@@ -2,6 +2,7 @@
 
 use crate::CdrError;
 use crate::wire::{CdrReader, CdrWriter};
+use nalgebra::Isometry3;
 
 /// A `builtin_interfaces/msg/Time`: seconds and nanoseconds since the ROS time epoch.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default)]
@@ -87,8 +88,8 @@ pub struct Pose {
 
 impl Pose {
     /// The pose of an isometry (`T_frame_child`).
-    pub fn from_isometry(pose: &nalgebra::Isometry3<f64>) -> Self {
-        let (position, orientation_xyzw) = crate::pose_fields(pose);
+    pub fn from_isometry(pose: &Isometry3<f64>) -> Self {
+        let (position, orientation_xyzw) = pose_fields(pose);
         Self {
             position,
             orientation_xyzw,
@@ -114,4 +115,11 @@ impl Pose {
             orientation_xyzw: r.f64s(field)?,
         })
     }
+}
+
+/// Position and (x, y, z, w) orientation of an isometry, as they go on the wire.
+pub fn pose_fields(pose: &Isometry3<f64>) -> ([f64; 3], [f64; 4]) {
+    let t = &pose.translation.vector;
+    let q = pose.rotation.quaternion();
+    ([t.x, t.y, t.z], [q.i, q.j, q.k, q.w])
 }

@@ -39,10 +39,10 @@ pub use graph::{
     entity_liveliness_key_expr, fully_qualified_topic, mangle_name, node_liveliness_key_expr,
     pose_stamped_key_expr, publisher_liveliness_key_expr, topic_key_expr, typed_key_expr,
 };
-pub use header::{Header, Pose, RosTime};
+pub use header::{Header, Pose, RosTime, pose_fields};
 pub use pose_stamped::{
     PoseStampedMsg, decode_pose_stamped, encode_pose_stamped, encode_pose_stamped_isometry,
-    pose_fields, pose_stamped_encoded_len,
+    pose_stamped_encoded_len,
 };
 pub use types::RosType;
 pub use wire::{CdrReader, CdrWriter};

@@ -1,6 +1,6 @@
 //! `geometry_msgs/msg/PoseStamped` in plain little-endian CDR: encoder, decoder and encoded length.
 
-use crate::header::{Header, Pose, RosTime};
+use crate::header::{Header, Pose, RosTime, pose_fields};
 use crate::wire::{CdrReader, CdrWriter};
 use crate::{CDR_LE_HEADER, CdrError};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
@@ -29,13 +29,6 @@ impl PoseStampedMsg {
         let [px, py, pz] = self.position;
         Isometry3::from_parts(Translation3::new(px, py, pz), q)
     }
-}
-
-/// Position and (x, y, z, w) orientation of an isometry, as they go on the wire.
-pub fn pose_fields(pose: &Isometry3<f64>) -> ([f64; 3], [f64; 4]) {
-    let t = &pose.translation.vector;
-    let q = pose.rotation.quaternion();
-    ([t.x, t.y, t.z], [q.i, q.j, q.k, q.w])
 }
 
 /// Encodes `geometry_msgs/msg/PoseStamped` into `out` (cleared first; its capacity is reused, so steady-state

@@ -25,6 +25,7 @@ pub mod recorder;
 pub mod replay;
 mod revision;
 pub mod ros2;
+pub mod scene;
 pub mod setup;
 pub mod sinks;
 pub mod source;

@@ -11,14 +11,15 @@ use super::source::{Source, SourceError};
 use crate::publish::PoseSink;
 use crate::publish::csv::CsvPoseSink;
 use drivers::event::{CdEvent, EventSink, TriggerEdge};
-use drivers::recording::{CameraRig, ModelInfo, Recording};
+use drivers::recording::Recording;
 use drivers::timeline::TimelineConfig;
-use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use scene::mesh::{MeshLoadOptions, load_obj};
 use scene::render::{RendererKind, create_renderer};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
+
+pub use super::scene::{SceneObject, TrackerScene, pose_of};
 use tracker::recording::{PoseTrack, ground_truth_objects, symmetries_of, tracking_rig};
 use tracker::track::{
     EventTrack6d, HoldPoseTracker, PoseTracker, TrackedObject, TrackerConfig, TrackingMethod,
@@ -26,30 +27,6 @@ use tracker::track::{
 
 /// Tracker methods [`build_tracker`] knows.
 pub const METHODS: &[&str] = &["eventtrack6d", "depth30", "events-only", "static"];
-
-/// One object to track.
-#[derive(Debug, Clone)]
-pub struct SceneObject {
-    /// Name (topics, CSV rows).
-    pub name: String,
-    /// OBJ mesh, metres.
-    pub mesh: PathBuf,
-    /// BOP-style model information when the recording has it.
-    pub info: Option<ModelInfo>,
-    /// First pose: time on the event camera's clock (microseconds) and `T_cam_obj`.
-    pub first_pose: (i64, Isometry3<f64>),
-}
-
-/// What a tracker is built from: the rig and the objects with their first poses.
-#[derive(Debug, Clone)]
-pub struct TrackerScene {
-    /// Cameras and `T_event_depth`.
-    pub rig: CameraRig,
-    /// Objects, in output order.
-    pub objects: Vec<SceneObject>,
-    /// The recording being replayed, if any.
-    pub recording: Option<Recording>,
-}
 
 /// Builds the tracker named `method` for `scene`, triggered on `timeline`.
 ///
@@ -120,14 +97,6 @@ fn build_eventtrack6d(
         .map_err(|e| RuntimeError::Tracker(format!("tracker.renderer: {e}")))?;
     EventTrack6d::new(config, rig, objects, renderer)
         .map_err(|e| RuntimeError::Tracker(e.to_string()))
-}
-
-pub(super) fn pose_of(o: &ObjectConfig) -> Isometry3<f64> {
-    let [x, y, z, w] = o.orientation;
-    Isometry3::from_parts(
-        Translation3::new(o.position[0], o.position[1], o.position[2]),
-        UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)),
-    )
 }
 
 /// Finds the first rising trigger edge on `channel` (the first tick) by decoding `events.raw` only that far.

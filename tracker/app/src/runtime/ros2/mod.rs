@@ -14,40 +14,19 @@ pub use playback::{PlaybackEndpoints, playback_config};
 pub use startup::connect;
 
 use super::assembly::StreamAssembler;
-use super::source::{Source, SourceError, SourceOutput, SourceStats, StopFlag};
+use super::source::{Ros2Stats, Source, SourceError, SourceOutput, SourceStats, StopFlag};
 use clock::ClockOffset;
 use drivers::event::{EventBuffer, Geometry};
 use drivers::formats::evt3::Evt3Decoder;
 use drivers::recording::{CameraIntrinsics, DepthFrame, TriggerSchedule};
 use inputs::{Ros2Input, Subscriptions, camera_info_mismatch};
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::VecDeque;
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::{Duration, Instant};
 use tracker::track::DepthTransport;
 
 /// How long the source waits for a sample before it checks the stop flag and the idle time again.
 const POLL: Duration = Duration::from_millis(50);
-
-/// What the ROS 2 source received (the summary's `ros2:` line, the status).
-#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
-pub struct Ros2Stats {
-    /// Event packets decoded.
-    pub packets: u64,
-    /// EVT3 bytes in them.
-    pub bytes: u64,
-    /// Packets missing by their sequence numbers (the decoder resynchronised after each gap).
-    pub packets_missing: u64,
-    /// Packets whose sequence number was not after the previous one's (dropped).
-    pub packets_out_of_order: u64,
-    /// Depth images used.
-    pub depth_images: u64,
-    /// CameraInfo messages received.
-    pub camera_infos: u64,
-    /// Samples that could not be used, by kind.
-    pub unusable: BTreeMap<String, u64>,
-    /// The latest estimate of ROS time minus the event camera's time, nanoseconds.
-    pub clock_offset_ns: Option<i64>,
-}
 
 /// The ROS 2 source; built (and connected) by [`connect`].
 pub struct Ros2Source {

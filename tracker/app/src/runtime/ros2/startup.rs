@@ -9,7 +9,7 @@ use super::inputs::{
 use crate::publish::ros2::{self, RosNodeIdentity};
 use crate::runtime::config::{Config, Ros2SourceConfig};
 use crate::runtime::error::RuntimeError;
-use crate::runtime::setup::{SceneObject, TrackerScene, pose_of};
+use crate::runtime::scene::{SceneObject, TrackerScene, pose_of};
 use crate::runtime::source::{Source, SourceError};
 use drivers::event::{CdEvent, EventSink, Geometry, TriggerEdge};
 use drivers::formats::evt3::Evt3Decoder;
