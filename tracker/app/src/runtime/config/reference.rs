@@ -14,7 +14,7 @@ pub fn reference_markdown() -> String {
     let mut out = String::from(
         "# Configuration reference\n\n\
          Every table and key of a configuration file for `eventtrack6d run --config FILE` (`config/default.toml` is \
-         the demo's, `config/rig-evk4-d435i.toml` the rig's), generated from the configuration types' doc comments \
+         the demo's, `config/rig-evk4-d435i.toml` the USB rig's, `config/rig-ros2.toml` the ROS 2 one's), generated from the configuration types' doc comments \
          by `cargo test -p eventtrack6d --lib reference` (`ET6D_WRITE_DOCS=1` rewrites this file). Every key \
          has its default unless it says `required`; unknown keys are refused. How the pieces work together: \
          [runtime.md](runtime.md) and [tracker.md](tracker.md).\n",
@@ -312,7 +312,7 @@ mod tests {
     #[test]
     fn every_key_of_the_shipped_configurations_is_in_the_reference() {
         let reference = reference_markdown();
-        for file in ["default.toml", "rig-evk4-d435i.toml"] {
+        for file in ["default.toml", "rig-evk4-d435i.toml", "rig-ros2.toml"] {
             let path = format!("{}/../../config/{file}", env!("CARGO_MANIFEST_DIR"));
             let text = std::fs::read_to_string(&path).unwrap();
             let doc: toml::Table = toml::from_str(&text).unwrap();

@@ -193,6 +193,21 @@ fn shipped_configurations_load_and_the_rig_says_the_live_depth_camera_is_not_the
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config");
     let demo = load(&root.join("default.toml")).unwrap();
     assert_eq!(demo.source.kind, SourceKind::Demo);
+    let ros2 = load(&root.join("rig-ros2.toml")).unwrap();
+    assert_eq!(ros2.source.kind, SourceKind::Ros2);
+    let mut quick = ros2.clone();
+    let r = quick.ros2.as_mut().unwrap();
+    // Nothing publishes here: the wait ends with what is missing, naming the topic and where it looked.
+    r.wait_for_data_s = 0.3;
+    r.connect = Vec::new();
+    let e = crate::runtime::setup::build_source(&quick)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("no EventPacket arrived on /event_camera/events"),
+        "{e}"
+    );
     let rig = load(&root.join("rig-evk4-d435i.toml")).unwrap();
     assert_eq!(rig.source.kind, SourceKind::Live);
     assert_eq!(rig.can.interface.as_deref(), Some("can0"));
