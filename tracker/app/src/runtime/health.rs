@@ -232,6 +232,8 @@ pub struct Health {
     pub depth_frames_shed: u64,
     /// What the control commands (re-seed, reset) did so far.
     pub control: super::control::ControlCounters,
+    /// What the ROS 2 source received so far (`None` for other sources).
+    pub ros2_input: Option<super::source::Ros2Stats>,
 }
 
 /// The live event camera as the status reports it.
@@ -308,6 +310,7 @@ impl Health {
             depth_frames_too_old: 0,
             depth_frames_shed: 0,
             control: Default::default(),
+            ros2_input: None,
         }
     }
 
@@ -401,6 +404,7 @@ impl Health {
             "renderer": self.renderer,
             "event_camera": self.event_camera,
             "control": self.control,
+            "ros2_input": self.ros2_input,
         })
     }
 }

@@ -164,6 +164,13 @@ impl SourceOutput {
         }
     }
 
+    /// Reports what the ROS 2 source received so far (for the status topic).
+    pub fn ros2_health(&self, stats: &Ros2Stats) {
+        if let Some(h) = &self.health {
+            h.lock().unwrap_or_else(|p| p.into_inner()).ros2_input = Some(stats.clone());
+        }
+    }
+
     /// An empty event buffer (recycled; no allocation in steady state).
     pub fn buffer(&self) -> Vec<CdEvent> {
         self.queue.buffer()

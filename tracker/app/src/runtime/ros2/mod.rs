@@ -166,8 +166,13 @@ impl Source for Ros2Source {
             depth_camera: self.depth_camera.clone(),
         };
         let mut last_packet = Instant::now();
+        let mut last_report = Instant::now();
         let mut stopped = false;
         loop {
+            if last_report.elapsed() >= Duration::from_secs(1) {
+                last_report = Instant::now();
+                out.ros2_health(&r.stats);
+            }
             if stop.is_set() {
                 stopped = true;
                 break;
@@ -200,6 +205,7 @@ impl Source for Ros2Source {
         stats.depth_in_transit += r.waiting_depth.len() as u64;
         stats.stopped = stopped;
         stats.set_anomalies(r.decoder.anomalies());
+        out.ros2_health(&r.stats);
         stats.ros2 = Some(r.stats);
         if let Some(session) = self.session.take() {
             use zenoh::Wait;
