@@ -4,6 +4,8 @@
 pub mod dbc;
 /// A renderer that runs a hook before every render (counting renders, noting threads).
 pub mod render_hook;
+/// The independent ROS 2 type system (rosbags, `tests/ros2/rosbags_check.py`).
+pub mod rosbags;
 /// A tracker in steady state on a generated recording (tick benchmark, no-allocation test).
 pub mod tick_fixture;
 /// The test VM with the kernel's USB/IP host side (`tests/vm/`).

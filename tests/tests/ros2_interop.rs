@@ -9,6 +9,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+use eventtrack6d_tests::rosbags::{rosbags, rosbags_decode, script};
 use ros2::diagnostic::{
     DiagnosticArray, DiagnosticStatus, decode_diagnostic_array, encode_diagnostic_array, level,
 };
@@ -27,64 +28,9 @@ use ros2::vision::{
 };
 use ros2::{Header, Pose, PoseStampedMsg, RosTime, decode_pose_stamped, encode_pose_stamped};
 use serde_json::{Value, json};
-use std::io::Write;
-use std::path::PathBuf;
 use std::process::{Command, Stdio};
 
 // --- the independent reader -------------------------------------------------------------------------------------
-
-fn script() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("ros2/rosbags_check.py")
-}
-
-/// Runs `rosbags_check.py ARGS` with `stdin`; its stdout. Panics with the reason (and how to install rosbags).
-fn rosbags(args: &[&str], stdin: &[u8]) -> Vec<u8> {
-    let mut child = match Command::new("python3")
-        .arg(script())
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-    {
-        Ok(c) => c,
-        Err(e) => panic!("python3 is needed for the independent ROS 2 type system (rosbags): {e}"),
-    };
-    // The script reads all of stdin before it writes anything, so writing first cannot deadlock.
-    child.stdin.take().unwrap().write_all(stdin).unwrap();
-    let out = child.wait_with_output().unwrap();
-    // Without rosbags the script says so and how to install it (`bash .ci/setup`).
-    assert!(
-        out.status.success(),
-        "rosbags_check.py {args:?} failed ({}):\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out.stdout
-}
-
-/// Each payload (CDR with its encapsulation header, as rmw_zenoh carries it) decoded by rosbags as `ty`.
-fn rosbags_decode(ty: &str, payloads: &[Vec<u8>]) -> Vec<Value> {
-    let dir = tempfile::tempdir().unwrap();
-    let files: Vec<String> = payloads
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let f = dir.path().join(format!("{i}.cdr"));
-            std::fs::write(&f, p).unwrap();
-            f.to_str().unwrap().to_owned()
-        })
-        .collect();
-    let mut args = vec!["decode", ty];
-    args.extend(files.iter().map(String::as_str));
-    let out = String::from_utf8(rosbags(&args, b"")).unwrap();
-    let decoded: Vec<Value> = out
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
-    assert_eq!(decoded.len(), payloads.len(), "{out}");
-    decoded
-}
 
 /// `msg` (the script's JSON form) encoded by rosbags as `ty`.
 fn rosbags_encode(ty: &str, msg: &Value) -> Vec<u8> {
