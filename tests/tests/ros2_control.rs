@@ -338,7 +338,7 @@ congestion_control = "block"
             let response = trigger::decode_trigger_response(&sample.payload().to_bytes()).unwrap();
             let tick: i64 = response
                 .message
-                .strip_prefix("1 objects reset to their first poses at the tick of ")
+                .strip_prefix("1 object reset to its first pose at the tick of ")
                 .and_then(|m| m.strip_suffix(" us"))
                 .unwrap_or_else(|| panic!("reset reply: {response:?}"))
                 .parse()
@@ -473,7 +473,7 @@ congestion_control = "block"
     assert!(
         c["last"]
             .as_str()
-            .is_some_and(|l| l.starts_with("done: 1 objects reset")),
+            .is_some_and(|l| l.starts_with("done: 1 object reset")),
         "{c}"
     );
 }

@@ -122,9 +122,12 @@ impl ControlApplier {
                         return ControlOutcome::refused(format!("{name}: {why}"));
                     }
                 }
+                let n = self.first_poses.len();
                 ControlOutcome::done(format!(
-                    "{} objects reset to their first poses at the tick of {at_us} us",
-                    self.first_poses.len()
+                    "{n} object{} reset to {} first pose{} at the tick of {at_us} us",
+                    if n == 1 { "" } else { "s" },
+                    if n == 1 { "its" } else { "their" },
+                    if n == 1 { "" } else { "s" },
                 ))
             }
         }

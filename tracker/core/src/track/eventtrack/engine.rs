@@ -188,14 +188,21 @@ impl TickEngine {
     }
 
     /// Re-seeds object `k` at `pose` as of `t_us` ([`crate::track::PoseTracker::reseed`]): its estimate is replaced
-    /// and its motion forgotten; `false` for an unknown object.
+    /// and what was measured at the old one forgotten; `false` for an unknown object.
     pub fn reseed(&mut self, k: usize, t_us: i64, pose: Isometry3<f64>) -> bool {
         let Some(o) = self.objects.get_mut(k) else {
             return false;
         };
         o.state.reset(t_us, pose);
+        // Nothing measured at the replaced estimate carries over: not its motion, not the depth anchors the next
+        // frame's motion would be measured from, not the depth agreement and visibility its quality holds until
+        // the next frame (the object starts as at its first pose).
         o.state.velocity = nalgebra::Vector6::zeros();
         o.state.previous = None;
+        o.state.anchor = None;
+        o.state.anchor_before = None;
+        o.state.depth_fit = 1.0;
+        o.state.visibility = 1.0;
         self.renderers.forget_prefetched();
         true
     }
