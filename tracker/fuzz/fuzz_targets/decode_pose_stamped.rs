@@ -2,10 +2,6 @@
 //! Fuzz the CDR `geometry_msgs/msg/PoseStamped` decoder and the rmw_zenoh attachment parser: no panic on any
 //! input, and whatever decodes re-encodes to bytes that decode to the same message (bit for bit, NaNs included).
 
-#[allow(dead_code, unused_imports)]
-#[path = "../../app/src/publish/ros2/mod.rs"]
-mod ros2;
-
 use libfuzzer_sys::fuzz_target;
 
 fn bits(msg: &ros2::PoseStampedMsg) -> (ros2::RosTime, &str, [u64; 7]) {
