@@ -26,16 +26,19 @@ struct Cli {
 enum Command {
     /// Generate one recording without hardware.
     ///
-    /// A textured object from the procedural library (or your OBJ, in metres) moves after one of the paper's
-    /// motion profiles in front of a static EVK4-like event camera (1280x720, fx 1000 px) and a D435i-like depth
-    /// camera (848x480, 30 Hz, 6 cm to the side), with a textured wall and table and a hand-like occluder gripping
-    /// the object. The recording holds ESIM events with the rig's trigger train (events.raw), RealSense-like depth
-    /// frames, the cameras, ground truth at 1 kHz plus every tick, and the object meshes. The same seed gives
-    /// byte-identical recordings. A progress bar shows the simulated time. The format: docs/recording-format.md;
-    /// the simulation: docs/simulator.md.
+    /// A textured object from the procedural library (or a novel procedural shape, or your OBJ, in metres) moves
+    /// after one of the paper's motion profiles in front of a static EVK4-like event camera (1280x720, fx 1000 px)
+    /// and a D435i-like depth camera (848x480, 30 Hz, 6 cm to the side), with a textured wall and table and a
+    /// hand-like occluder gripping the object. The recording holds ESIM events with the rig's trigger train
+    /// (events.raw), RealSense-like depth frames, the cameras, ground truth at 1 kHz plus every tick, and the
+    /// object meshes. The same seed gives byte-identical recordings. A progress bar shows the simulated time. The
+    /// format: docs/recording-format.md; the simulation: docs/simulator.md.
     Generate {
         /// Library object name (cracker_box, pudding_box, can, bottle, mug, bowl, banana, hammer, spatula,
-        /// drill, marker, wine_glass) or a path to an `.obj` file.
+        /// drill, marker, wine_glass); a procedurally generated object of a shape family the library lacks,
+        /// `novel:SEED` (the family by SEED mod 6: superquadric, star_prism, torus, bracket, twisted_prism,
+        /// holed_frustum) or by its name `novel_<family>_<seed>` (its shape and texture depend on these only, not on
+        /// --seed); or a path to an `.obj` file.
         #[arg(long)]
         object: String,
         /// Motion profile: translation, rotation, shake, throw (ballistic flight with spin between two hands),
@@ -64,7 +67,7 @@ enum Command {
         /// Leave out the hand-like occluders.
         #[arg(long)]
         no_hands: bool,
-        /// A further object in the scene, tracked too (repeatable): library name or `.obj` path, its motion
+        /// A further object in the scene, tracked too (repeatable): an object as for --object, its motion
         /// and speed (default: those of `--object`) and where its trajectory is centred relative to the first
         /// object's, metres in the camera frame (default: 15 cm nearer the camera per further object, so it
         /// passes in front of the others). Each has its own hand and its own seed; names must differ. E.g.
@@ -77,12 +80,14 @@ enum Command {
     /// `dev`: every library object under three motion profiles, at slow, moderate and fast speed (36 sequences,
     /// 3 s each). `holdout`: the same shape with other seeds and each object under other motion-speed pairs, to
     /// check a change tuned on `dev`. `smoke`: two 1 s sequences. `multi`: 12 scenes of two objects that hide each
-    /// other, 2-3 s each. Writes DIR/<sequence>/ and DIR/suite.json. Each sequence has its own seed, so the
+    /// other, 2-3 s each. `fast`: 36 sequences of 3 s at fast speed, the library objects twice on new seeds and
+    /// pairings (groups dev-like and holdout-like) and 12 novel objects (group novel, named novel_*). Writes DIR/<sequence>/ and DIR/suite.json. Each sequence has its own seed, so the
     /// recordings do not depend on --jobs. Progress lines name each sequence as it finishes; after a failure no
     /// further sequence is started and the first error is reported. Suite contents and generation times:
     /// docs/simulator.md.
     Suite {
-        /// Suite name: dev, holdout (dev's shape, other seeds and pairings), smoke or multi (two objects per scene).
+        /// Suite name: dev, holdout (dev's shape, other seeds and pairings), smoke, multi (two objects per scene) or
+        /// fast (fast motion only, library and novel objects).
         #[arg(long, default_value = "dev", value_parser = PossibleValuesParser::new(hil_sim::suite::SUITES))]
         name: String,
         /// Output directory: one recording directory per sequence, and suite.json.
@@ -193,19 +198,17 @@ fn main() -> ExitCode {
             no_hands,
             with,
         } => {
-            let object = match ObjectKind::from_name(&object) {
-                Some(k) => ObjectSource::Library(k),
-                None if object.to_ascii_lowercase().ends_with(".obj") => {
-                    ObjectSource::File(PathBuf::from(object))
-                }
-                None => {
-                    let names: Vec<&str> = ObjectKind::ALL.iter().map(|k| k.name()).collect();
-                    eprintln!(
-                        "error: unknown object `{object}`: use a library name ({}) or a path to an .obj file",
-                        names.join(", ")
-                    );
-                    return ExitCode::FAILURE;
-                }
+            let Some(object) = ObjectSource::parse(&object) else {
+                let names: Vec<&str> = ObjectKind::ALL.iter().map(|k| k.name()).collect();
+                eprintln!(
+                    "error: unknown object `{object}`: use a library name ({}), novel:SEED, a novel object's name \
+                     novel_<family>_<seed> (families: {}) or a path to an .obj file",
+                    names.join(", "),
+                    hil_sim::objects::NovelFamily::ALL
+                        .map(|f| f.name())
+                        .join(", ")
+                );
+                return ExitCode::FAILURE;
             };
             let mut config = GenerateConfig::new(object, motion, speed, seconds, seed);
             for (k, spec) in with.iter().enumerate() {

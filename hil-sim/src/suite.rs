@@ -1,11 +1,12 @@
 //! Fixed, named suites of sequences for benchmarking (every library object under several motion profiles and
-//! speed levels), generated once and reused.
+//! speed levels, and objects of shapes the library lacks), generated once and reused.
 
 use crate::generate::{
     Companion, GenerateConfig, GenerateError, GenerateReport, ObjectSource, generate,
 };
 use crate::motion::{MotionProfile, SpeedLevel};
 use crate::objects::ObjectKind;
+use crate::objects::novel::{NovelFamily, novel_name};
 use drivers::recording::Recording;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -17,10 +18,20 @@ pub struct SuiteEntry {
     pub name: String,
     /// What to generate.
     pub config: GenerateConfig,
+    /// The part of the suite it belongs to, where results are reported by part (`fast`: `dev-like`,
+    /// `holdout-like`, `novel`); written into `suite.json`.
+    pub group: Option<&'static str>,
 }
 
 /// Names of the suites [`suite`] knows.
-pub const SUITES: [&str; 4] = ["dev", "holdout", "smoke", "multi"];
+pub const SUITES: [&str; 5] = ["dev", "holdout", "smoke", "multi", "fast"];
+
+/// Seeds of the `fast` suite: its dev-like library round, holdout-like library round and novel objects start here
+/// (dev uses 1000 on, holdout 3000 on).
+const FAST_SEEDS: [u64; 3] = [5000, 6000, 7000];
+
+/// Novel objects in the `fast` suite (each family twice).
+const FAST_NOVEL: usize = 12;
 
 /// The sequences of a named suite: `dev` is every library object under three profiles (one slow, one
 /// moderate, one fast; the six profiles rotate across objects so each appears six times), 3 s each; `holdout`
@@ -28,6 +39,11 @@ pub const SUITES: [&str; 4] = ["dev", "holdout", "smoke", "multi"];
 /// motion-speed pairs (for checking a change tuned on `dev` on recordings it was not tuned on); `smoke`
 /// is two objects, 1 s each, for quick end-to-end checks; `multi` is 12 scenes of two objects each (the second
 /// on its own trajectory 15 cm nearer the camera, so they hide each other), every library object in one to three scenes, 2-3 s.
+/// `fast` is 36 sequences of 3 s, all at fast speed: two rounds of the 12 library objects (group `dev-like`, seeds
+/// 5000-5011, object `i` under profile `i`, as dev pairs it at slow speed; group `holdout-like`, seeds 6000-6011,
+/// profile `i + 3`, as holdout pairs it at slow speed; neither the profile dev nor holdout give it at fast speed),
+/// then 12 novel objects (group `novel`, `novel:7000` to `novel:7011`, each shape family twice under two profiles,
+/// each profile twice), for checking fast motion on seeds and shapes nothing was tuned on.
 pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
     let entry = |kind: ObjectKind,
                  motion: MotionProfile,
@@ -36,6 +52,7 @@ pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
                  seed: u64| SuiteEntry {
         name: format!("{}-{}-{}", kind.name(), motion.name(), speed.name()),
         config: GenerateConfig::new(ObjectSource::Library(kind), motion, speed, seconds, seed),
+        group: None,
     };
     match name {
         "dev" | "holdout" => {
@@ -160,6 +177,45 @@ pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
                 .collect();
             Some(out)
         }
+        "fast" => {
+            let speed = SpeedLevel::Fast;
+            let mut out = Vec::new();
+            for (group, rotate, first_seed) in [
+                ("dev-like", 0, FAST_SEEDS[0]),
+                ("holdout-like", 3, FAST_SEEDS[1]),
+            ] {
+                for (i, kind) in ObjectKind::ALL.into_iter().enumerate() {
+                    let motion = MotionProfile::ALL[(i + rotate) % MotionProfile::ALL.len()];
+                    let mut e = entry(kind, motion, speed, 3.0, first_seed + i as u64);
+                    e.group = Some(group);
+                    out.push(e);
+                }
+            }
+            for k in 0..FAST_NOVEL {
+                let seed = FAST_SEEDS[2] + k as u64;
+                let family = NovelFamily::for_seed(seed);
+                // The second round turns each family's profile on by two.
+                let n = MotionProfile::ALL.len();
+                let motion = MotionProfile::ALL[(k + 2 * (k / n)) % n];
+                out.push(SuiteEntry {
+                    name: format!(
+                        "{}-{}-{}",
+                        novel_name(family, seed),
+                        motion.name(),
+                        speed.name()
+                    ),
+                    config: GenerateConfig::new(
+                        ObjectSource::Novel { family, seed },
+                        motion,
+                        speed,
+                        3.0,
+                        seed,
+                    ),
+                    group: Some("novel"),
+                });
+            }
+            Some(out)
+        }
         _ => None,
     }
 }
@@ -171,6 +227,10 @@ fn up_to_date(dir: &Path, config: &GenerateConfig) -> bool {
     };
     let p = &rec.meta.parameters;
     rec.meta.generator == format!("hil-sim {}", env!("CARGO_PKG_VERSION"))
+        && config
+            .object
+            .object_name()
+            .is_none_or(|name| p.get("object") == Some(&json!(name)))
         && p.get("motion") == Some(&json!(config.motion.name()))
         && p.get("speed") == Some(&json!(config.speed.name()))
         && p.get("seconds") == Some(&json!(config.seconds))
@@ -208,22 +268,31 @@ pub fn generate_suite(
         },
         |i, report| on_sequence(i, &entries[i], report.as_ref()),
     )?;
+    let path = out.join("suite.json");
+    let text = serde_json::to_string_pretty(&suite_index(name, entries)).unwrap_or_default();
+    std::fs::write(&path, text).map_err(|error| GenerateError::Io { path, error })?;
+    Ok(dirs)
+}
+
+/// The content of `suite.json`: the suite's name and, per sequence, its directory name, object, motion, speed,
+/// length, seed and (where the suite has parts) group.
+fn suite_index(name: &str, entries: &[SuiteEntry]) -> serde_json::Value {
     let list: Vec<_> = entries
         .iter()
         .map(|e| {
             let object = match &e.config.object {
-                ObjectSource::Library(k) => k.name().to_string(),
                 ObjectSource::File(p) => p.display().to_string(),
+                o => o.object_name().unwrap_or_default(),
             };
-            json!({"name": e.name, "object": object, "motion": e.config.motion.name(),
-                   "speed": e.config.speed.name(), "seconds": e.config.seconds, "seed": e.config.seed})
+            let mut entry = json!({"name": e.name, "object": object, "motion": e.config.motion.name(),
+                   "speed": e.config.speed.name(), "seconds": e.config.seconds, "seed": e.config.seed});
+            if let (Some(group), Some(map)) = (e.group, entry.as_object_mut()) {
+                map.insert("group".into(), json!(group));
+            }
+            entry
         })
         .collect();
-    let path = out.join("suite.json");
-    let text = serde_json::to_string_pretty(&json!({"suite": name, "sequences": list}))
-        .unwrap_or_default();
-    std::fs::write(&path, text).map_err(|error| GenerateError::Io { path, error })?;
-    Ok(dirs)
+    json!({"suite": name, "sequences": list})
 }
 
 /// Runs `work(i)` for every `i` in `0..n` on up to `jobs` threads (at least one), taking indices in order, and
@@ -332,6 +401,99 @@ mod tests {
         names.sort();
         names.dedup();
         assert_eq!(names.len(), s.len());
+    }
+
+    #[test]
+    fn fast_suite_is_fast_library_and_novel_objects_on_new_seeds_and_pairings() {
+        let fast = suite("fast").unwrap();
+        let (dev, holdout) = (suite("dev").unwrap(), suite("holdout").unwrap());
+        assert!(fast.len() >= 36, "{}", fast.len());
+        let mut names: Vec<_> = fast.iter().map(|e| &e.name).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), fast.len(), "directory names differ");
+        let mut seeds: Vec<_> = fast.iter().map(|e| e.config.seed).collect();
+        seeds.sort_unstable();
+        seeds.dedup();
+        assert_eq!(seeds.len(), fast.len(), "seeds differ");
+        for e in &fast {
+            assert_eq!(e.config.speed, SpeedLevel::Fast, "{}", e.name);
+            assert_eq!(e.config.seconds, 3.0, "{}", e.name);
+            assert!(e.config.companions.is_empty(), "{}", e.name);
+            assert!(
+                dev.iter()
+                    .chain(&holdout)
+                    .all(|d| d.config.seed != e.config.seed),
+                "{}: seed used by dev or holdout",
+                e.name
+            );
+            let novel = matches!(e.config.object, ObjectSource::Novel { .. });
+            assert_eq!(e.name.starts_with("novel_"), novel, "{}", e.name);
+            assert_eq!(e.group == Some("novel"), novel, "{}", e.name);
+            assert!(e.name.starts_with(&e.config.object.object_name().unwrap()));
+        }
+        for p in MotionProfile::ALL {
+            let n = fast.iter().filter(|e| e.config.motion == p).count();
+            assert!(n >= 4, "{p}: {n}");
+        }
+        // Library: every object in the dev-like and in the holdout-like round, each time under a profile that
+        // neither dev nor holdout gives it at fast speed.
+        for kind in ObjectKind::ALL {
+            let lib = ObjectSource::Library(kind);
+            let mine: Vec<_> = fast.iter().filter(|e| e.config.object == lib).collect();
+            let groups: Vec<_> = mine.iter().map(|e| e.group).collect();
+            assert_eq!(groups, [Some("dev-like"), Some("holdout-like")], "{kind:?}");
+            assert_ne!(mine[0].config.motion, mine[1].config.motion, "{kind:?}");
+            for e in &mine {
+                for other in dev.iter().chain(&holdout) {
+                    if other.config.object == lib && other.config.speed == SpeedLevel::Fast {
+                        assert_ne!(other.config.motion, e.config.motion, "{}", e.name);
+                    }
+                }
+            }
+        }
+        // Novel objects: at least 12, every family at least twice under two profiles, every profile.
+        let novel: Vec<_> = fast
+            .iter()
+            .filter_map(|e| match e.config.object {
+                ObjectSource::Novel { family, seed } => Some((family, seed, e.config.motion)),
+                _ => None,
+            })
+            .collect();
+        assert!(novel.len() >= 12);
+        for family in NovelFamily::ALL {
+            let mut profiles: Vec<_> = novel
+                .iter()
+                .filter(|n| n.0 == family)
+                .map(|n| n.2)
+                .collect();
+            assert!(profiles.len() >= 2, "{family:?}");
+            profiles.dedup();
+            assert!(profiles.len() >= 2, "{family:?} under one profile");
+        }
+        for p in MotionProfile::ALL {
+            assert!(novel.iter().any(|n| n.2 == p), "no novel object under {p}");
+        }
+    }
+
+    #[test]
+    fn suite_index_names_objects_and_groups() {
+        let index = suite_index("fast", &suite("fast").unwrap());
+        let seqs = index["sequences"].as_array().unwrap();
+        assert_eq!(index["suite"], "fast");
+        assert_eq!(seqs[0]["object"], "cracker_box");
+        assert_eq!(seqs[0]["group"], "dev-like");
+        let last = seqs.last().unwrap();
+        assert_eq!(last["group"], "novel");
+        assert!(last["object"].as_str().unwrap().starts_with("novel_"));
+        assert!(
+            last["name"]
+                .as_str()
+                .unwrap()
+                .starts_with(last["object"].as_str().unwrap())
+        );
+        let dev = suite_index("dev", &suite("dev").unwrap());
+        assert!(dev["sequences"][0].get("group").is_none());
     }
 
     #[test]

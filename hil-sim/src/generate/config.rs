@@ -4,6 +4,7 @@
 use crate::esim::{EsimConfig, EsimStats};
 use crate::motion::{MotionProfile, SpeedLevel};
 use crate::objects::ObjectKind;
+use crate::objects::novel::{self, NovelFamily};
 use drivers::recording::RecordingError;
 use scene::render::RenderError;
 use std::path::PathBuf;
@@ -15,6 +16,40 @@ pub enum ObjectSource {
     Library(ObjectKind),
     /// A user OBJ (metres), copied into the recording with its MTL and textures.
     File(PathBuf),
+    /// A procedurally generated object of a shape family the library lacks ([`crate::objects::novel`]), named
+    /// `novel_<family>_<seed>`; mesh and texture depend on the family and this seed only, not on the recording's.
+    Novel {
+        /// Its shape family.
+        family: NovelFamily,
+        /// Its seed.
+        seed: u64,
+    },
+}
+
+impl ObjectSource {
+    /// Reads an object given on the command line: a library name, `novel:SEED` or a novel object's name
+    /// `novel_<family>_<seed>`, or a path ending in `.obj`.
+    pub fn parse(name: &str) -> Option<Self> {
+        if let Some(kind) = ObjectKind::from_name(name) {
+            Some(ObjectSource::Library(kind))
+        } else if let Some((family, seed)) = novel::parse_spec(name) {
+            Some(ObjectSource::Novel { family, seed })
+        } else if name.to_ascii_lowercase().ends_with(".obj") {
+            Some(ObjectSource::File(PathBuf::from(name)))
+        } else {
+            None
+        }
+    }
+
+    /// The object's name in the recording (models and ground truth); `None` for a user OBJ, which is named after
+    /// its file.
+    pub fn object_name(&self) -> Option<String> {
+        match self {
+            ObjectSource::Library(kind) => Some(kind.name().to_string()),
+            ObjectSource::Novel { family, seed } => Some(novel::novel_name(*family, *seed)),
+            ObjectSource::File(_) => None,
+        }
+    }
 }
 
 /// A further object in the scene, moving on its own trajectory (with its own hand) beside the first.
@@ -32,8 +67,9 @@ pub struct Companion {
 }
 
 impl Companion {
-    /// Parses a command-line companion `NAME[:MOTION[:SPEED[:X,Y,Z]]]` (library name or `.obj` path; offset in
-    /// metres). Motion and speed default to `motion` and `speed`; the offset to [`Self::default_offset`]`(k)`.
+    /// Parses a command-line companion `NAME[:MOTION[:SPEED[:X,Y,Z]]]` (library name, `novel:SEED`, a novel
+    /// object's name or an `.obj` path; offset in metres). Motion and speed default to `motion` and `speed`; the
+    /// offset to [`Self::default_offset`]`(k)`.
     pub fn parse(
         spec: &str,
         k: usize,
@@ -41,17 +77,16 @@ impl Companion {
         speed: SpeedLevel,
     ) -> Result<Self, String> {
         let mut parts = spec.split(':');
-        let name = parts.next().unwrap_or_default().trim();
-        let object = match ObjectKind::from_name(name) {
-            Some(kind) => ObjectSource::Library(kind),
-            None if name.to_ascii_lowercase().ends_with(".obj") => {
-                ObjectSource::File(PathBuf::from(name))
-            }
-            None => {
-                return Err(format!(
-                    "`{spec}`: unknown object `{name}` (a library name or a path to an .obj file)"
-                ));
-            }
+        let mut name = parts.next().unwrap_or_default().trim().to_string();
+        if name == "novel" {
+            // `novel:SEED` holds the separator itself.
+            name = format!("novel:{}", parts.next().unwrap_or_default().trim());
+        }
+        let Some(object) = ObjectSource::parse(&name) else {
+            return Err(format!(
+                "`{spec}`: unknown object `{name}` (a library name, novel:SEED, novel_<family>_<seed> or a path \
+                 to an .obj file)"
+            ));
         };
         let motion = match parts.next() {
             Some(m) => m.parse().map_err(|e| format!("`{spec}`: {e}"))?,
@@ -253,6 +288,13 @@ mod tests {
                     match &c.object {
                         ObjectSource::Library(kind) => prop_assert_eq!(kind.name(), name),
                         ObjectSource::File(path) => prop_assert_eq!(path.to_str(), Some(name)),
+                        ObjectSource::Novel { family, seed } => {
+                            let parts: Vec<&str> = spec.split(':').map(str::trim).collect();
+                            let named = novel::novel_name(*family, *seed) == name;
+                            let by_seed = name == "novel"
+                                && parts.get(1).and_then(|p| p.parse::<u64>().ok()) == Some(*seed);
+                            prop_assert!(named || by_seed, "{:?}", c.object);
+                        }
                     }
                 }
                 Err(e) => prop_assert!(e.starts_with(&format!("`{spec}`: ")), "{}", e),
@@ -294,8 +336,28 @@ mod tests {
         let c = Companion::parse("parts/gear.obj:rotation", 1, m, s).unwrap();
         assert_eq!(c.object, ObjectSource::File("parts/gear.obj".into()));
         assert_eq!(c.motion, MotionProfile::Rotation);
+        let c = Companion::parse("novel:7001:throw", 1, m, s).unwrap();
+        assert_eq!(
+            c.object,
+            ObjectSource::Novel {
+                family: NovelFamily::for_seed(7001),
+                seed: 7001
+            }
+        );
+        assert_eq!(c.motion, MotionProfile::ThrowCatch);
+        let c = Companion::parse("novel_torus_17:shake:fast", 1, m, s).unwrap();
+        assert_eq!(
+            c.object,
+            ObjectSource::Novel {
+                family: NovelFamily::Torus,
+                seed: 17
+            }
+        );
+        assert_eq!(c.speed, SpeedLevel::Fast);
         for (spec, needle) in [
             ("teapot", "unknown object `teapot`"),
+            ("novel:x:shake", "unknown object `novel:x`"),
+            ("novel_cube_3", "unknown object `novel_cube_3`"),
             ("can:wobble", "unknown motion profile `wobble`"),
             ("can:shake:warp", "unknown speed level `warp`"),
             ("can:shake:slow:1,2", "must be X,Y,Z"),

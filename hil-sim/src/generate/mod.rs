@@ -75,9 +75,9 @@ pub fn generate(
         &format!("hil-sim {}", env!("CARGO_PKG_VERSION")),
     )?;
     for o in &scene_objects {
-        match (&o.source, &o.library_object) {
-            (_, Some(lib)) => {
-                objects::write_object(lib, &writer.models_dir())
+        match (&o.source, &o.generated) {
+            (_, Some(model)) => {
+                objects::write_object(model.as_ref(), &writer.models_dir())
                     .map_err(|e| GenerateError::Parameter(e.to_string()))?;
             }
             (ObjectSource::File(path), None) => {

@@ -1,9 +1,9 @@
 //! The simulated scene: the renderer with the object, hand and props registered, the trajectory, and how a
-//! user's OBJ or a library object becomes the recording's model.
+//! user's OBJ, a library object or a novel object becomes the recording's model.
 
 use super::{GenerateConfig, GenerateError, ObjectSource};
 use crate::motion::Trajectory;
-use crate::objects;
+use crate::objects::{self, ObjectModel};
 use crate::rig::{Prop, grip, hand_mesh, surroundings};
 use drivers::recording::{ContinuousSymmetry, ModelInfo};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -226,12 +226,13 @@ pub(super) fn copy_user_obj(obj: &Path, models: &Path, name: &str) -> Result<(),
     Ok(())
 }
 
-/// One object of a configuration: its name, model information and, for a library object, what to write.
+/// One object of a configuration: its name, model information and, for a generated (library or novel) object,
+/// what to write.
 pub(super) struct BuiltObject {
     pub(super) name: String,
     pub(super) info: ModelInfo,
     pub(super) source: ObjectSource,
-    pub(super) library_object: Option<objects::ProceduralObject>,
+    pub(super) generated: Option<Box<dyn ObjectModel>>,
 }
 
 /// The scene of a configuration, ready to render.
@@ -241,7 +242,7 @@ pub(super) struct Built {
     pub(super) objects: Vec<BuiltObject>,
 }
 
-/// The seed of the `k`-th object's shape, texture and trajectory (0: the configuration's own).
+/// The seed of the `k`-th object's trajectory and library object's texture (0: the configuration's own).
 fn object_seed(seed: u64, k: usize) -> u64 {
     if k == 0 {
         seed
@@ -250,23 +251,34 @@ fn object_seed(seed: u64, k: usize) -> u64 {
     }
 }
 
-fn object_mesh(
-    source: &ObjectSource,
-    seed: u64,
-) -> Result<
-    (
-        String,
-        Mesh,
-        Vec<Symmetry>,
-        Option<objects::ProceduralObject>,
-    ),
-    GenerateError,
-> {
+/// An object's name, mesh, symmetries and, when generated here, the model to write.
+type ObjectMesh = (String, Mesh, Vec<Symmetry>, Option<Box<dyn ObjectModel>>);
+
+fn object_mesh(source: &ObjectSource, seed: u64) -> Result<ObjectMesh, GenerateError> {
     Ok(match source {
         ObjectSource::Library(kind) => {
             let o = objects::generate(*kind, seed);
             let mesh = o.to_mesh()?;
-            (kind.name().to_string(), mesh, o.symmetries.clone(), Some(o))
+            (
+                kind.name().to_string(),
+                mesh,
+                o.symmetries.clone(),
+                Some(Box::new(o)),
+            )
+        }
+        // A novel object is its family and own seed, whatever the recording's seed.
+        ObjectSource::Novel {
+            family,
+            seed: shape_seed,
+        } => {
+            let o = objects::novel::generate(*family, *shape_seed);
+            let mesh = ObjectModel::to_mesh(&o)?;
+            (
+                o.name.clone(),
+                mesh,
+                o.symmetries.clone(),
+                Some(Box::new(o)),
+            )
         }
         ObjectSource::File(path) => {
             let loaded = load_obj(path, &MeshLoadOptions::default())?;
@@ -325,7 +337,7 @@ pub(super) fn build(config: &GenerateConfig) -> Result<Built, GenerateError> {
     let mut built_objects: Vec<BuiltObject> = Vec::new();
     for (k, (source, motion, speed, offset)) in scene_objects.enumerate() {
         let seed = object_seed(config.seed, k);
-        let (name, mesh, symmetries, library_object) = object_mesh(source, seed)?;
+        let (name, mesh, symmetries, generated) = object_mesh(source, seed)?;
         if built_objects.iter().any(|b| b.name == name) {
             return Err(GenerateError::Parameter(format!(
                 "two objects named `{name}`: the objects of a recording need distinct names"
@@ -344,7 +356,7 @@ pub(super) fn build(config: &GenerateConfig) -> Result<Built, GenerateError> {
             name,
             info,
             source: source.clone(),
-            library_object,
+            generated,
         });
     }
     let hand = hand_mesh(config.seed)?;
@@ -366,4 +378,46 @@ pub(super) fn build(config: &GenerateConfig) -> Result<Built, GenerateError> {
         stage,
         objects: built_objects,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::{MotionProfile, SpeedLevel};
+    use crate::objects::NovelFamily;
+
+    #[test]
+    fn a_novel_object_is_named_after_its_family_and_seed_whatever_the_recording_seed() {
+        let object = ObjectSource::Novel {
+            family: NovelFamily::Torus,
+            seed: 4,
+        };
+        let built: Vec<_> = [1, 2]
+            .into_iter()
+            .map(|seed| {
+                let config = GenerateConfig::new(
+                    object.clone(),
+                    MotionProfile::Shake,
+                    SpeedLevel::Fast,
+                    1.0,
+                    seed,
+                );
+                build(&config).unwrap()
+            })
+            .collect();
+        for b in &built {
+            let o = &b.objects[0];
+            assert_eq!(o.name, "novel_torus_4");
+            assert_eq!(o.info.name, o.name);
+            // A whole torus: any turn about z and a half turn about x.
+            assert_eq!(o.info.symmetries_continuous.len(), 1);
+            assert_eq!(o.info.symmetries_discrete.len(), 1);
+            assert_eq!(
+                o.generated.as_ref().map(|g| g.name()),
+                Some("novel_torus_4")
+            );
+        }
+        let points = |b: &Built| b.stage.objects[0].points.clone();
+        assert_eq!(points(&built[0]), points(&built[1]));
+    }
 }

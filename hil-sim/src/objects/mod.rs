@@ -6,10 +6,16 @@
 //! so that moving surfaces produce events. Objects are centred on their bounding box; the symmetry axis of round
 //! objects is the object z axis. [`write_object`] stores an object as OBJ + MTL + PNG that
 //! [`scene::mesh::load_obj`] reads back.
+//!
+//! [`novel`] makes objects of shape families the library lacks (superquadrics, star prisms, tori, brackets,
+//! twisted prisms, holed frustums), each from a seed, for checking the tracker on shapes it was not tuned on.
 
 mod builder;
+mod model;
+pub mod novel;
 mod packaging;
 mod preview;
+mod solid;
 pub(crate) mod tableware;
 pub mod texture;
 
@@ -18,13 +24,14 @@ mod tools;
 mod write;
 
 pub use builder::{MeshBuilder, UvRect};
+pub use model::ObjectModel;
+pub use novel::{NovelFamily, NovelObject};
 pub use preview::{PreviewError, render_preview};
 pub use write::{ObjectFiles, ObjectWriteError, models_info_json, write_library, write_object};
 
 use image::RgbImage;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
-use scene::mesh::{Material, Mesh, MeshError, MeshParts, ObjectInfo, Symmetry, Texture};
-use std::sync::Arc;
+use scene::mesh::{Mesh, MeshError, ObjectInfo, Symmetry};
 
 /// The categories of the library.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -215,34 +222,26 @@ impl ProceduralObject {
 
     /// The object as a renderable tracker mesh (same data [`write_object`] stores).
     pub fn to_mesh(&self) -> Result<Mesh, MeshError> {
-        let texture = Texture::from_srgb8(
-            self.texture.width(),
-            self.texture.height(),
-            self.texture.as_raw(),
-        );
-        let g = &self.geometry;
-        Mesh::new(
-            self.name(),
-            MeshParts {
-                positions: g.positions.clone(),
-                normals: g.normals.clone(),
-                uvs: g.uvs.clone(),
-                triangles: g.triangles.clone(),
-                triangle_materials: vec![],
-                materials: vec![Material {
-                    name: self.name().into(),
-                    diffuse: [1.0; 3],
-                    texture: texture.map(Arc::new),
-                }],
-            },
-        )
+        ObjectModel::to_mesh(self)
     }
 
     /// BOP-style object information (diameter and extent measured from the mesh, plus the symmetries).
     pub fn info(&self) -> Result<ObjectInfo, MeshError> {
-        Ok(ObjectInfo::from_mesh(
-            &self.to_mesh()?,
-            self.symmetries.clone(),
-        ))
+        ObjectModel::info(self)
+    }
+}
+
+impl ObjectModel for ProceduralObject {
+    fn name(&self) -> &str {
+        self.kind.name()
+    }
+    fn geometry(&self) -> &MeshBuilder {
+        &self.geometry
+    }
+    fn texture(&self) -> &RgbImage {
+        &self.texture
+    }
+    fn symmetries(&self) -> &[Symmetry] {
+        &self.symmetries
     }
 }

@@ -1,6 +1,6 @@
 //! Quick-look renders of library objects (for `hil-sim objects --preview` and for people checking the library).
 
-use super::ProceduralObject;
+use super::model::ObjectModel;
 use image::GrayImage;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 use scene::geometry::{PinholeCamera, Roi};
@@ -33,7 +33,10 @@ pub enum PreviewError {
 
 /// Renders `object` from a three-quarter view, 0.5 m away, into a `size x size` sRGB grey image whose crop is 1.2 x the
 /// object's diameter (the tracker's ROI). Background is black.
-pub fn render_preview(object: &ProceduralObject, size: u32) -> Result<GrayImage, PreviewError> {
+pub fn render_preview<O: ObjectModel + ?Sized>(
+    object: &O,
+    size: u32,
+) -> Result<GrayImage, PreviewError> {
     let name = object.name().to_string();
     let mesh = object.to_mesh().map_err(|source| PreviewError::Mesh {
         name: name.clone(),

@@ -1,6 +1,7 @@
 //! Writing objects as Wavefront OBJ + MTL + PNG texture, and the BOP-style `models_info` for a set of objects.
 
-use super::{ProceduralObject, library};
+use super::library;
+use super::model::ObjectModel;
 use scene::mesh::{MeshError, ObjectInfo};
 use serde_json::{Map, Value};
 use std::fmt::Write as _;
@@ -56,9 +57,9 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<(), ObjectWriteError> {
 }
 
 /// Writes `object` into `dir` (created if missing) as `<name>.obj`, `<name>.mtl` and `<name>.png`. Coordinates are
-/// written in metres with full f32 precision, so the loaded mesh equals [`ProceduralObject::to_mesh`].
-pub fn write_object(
-    object: &ProceduralObject,
+/// written in metres with full f32 precision, so the loaded mesh equals [`ObjectModel::to_mesh`].
+pub fn write_object<O: ObjectModel + ?Sized>(
+    object: &O,
     dir: &Path,
 ) -> Result<ObjectFiles, ObjectWriteError> {
     std::fs::create_dir_all(dir).map_err(|source| ObjectWriteError::Io {
@@ -71,7 +72,7 @@ pub fn write_object(
         mtl: dir.join(format!("{name}.mtl")),
         texture: dir.join(format!("{name}.png")),
     };
-    let g = &object.geometry;
+    let g = object.geometry();
     // OBJ: one vertex / texcoord / normal per index, faces reference the same index thrice.
     let mut obj = String::with_capacity(g.positions.len() * 96 + g.triangles.len() * 40);
     let _ = writeln!(
@@ -99,7 +100,7 @@ pub fn write_object(
     write_file(&files.obj, obj.as_bytes())?;
     write_file(&files.mtl, mtl.as_bytes())?;
     object
-        .texture
+        .texture()
         .save_with_format(&files.texture, image::ImageFormat::Png)
         .map_err(|e| ObjectWriteError::Texture {
             path: files.texture.clone(),
