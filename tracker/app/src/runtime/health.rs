@@ -233,7 +233,28 @@ pub struct Health {
     /// What the control commands (re-seed, reset) did so far.
     pub control: super::control::ControlCounters,
     /// What the ROS 2 source received so far (`None` for other sources).
-    pub ros2_input: Option<super::source::Ros2Stats>,
+    pub ros2_input: Option<Ros2Stats>,
+}
+
+/// What the ROS 2 source received (the summary's `ros2:` line, the status).
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Ros2Stats {
+    /// Event packets decoded.
+    pub packets: u64,
+    /// EVT3 bytes in them.
+    pub bytes: u64,
+    /// Packets missing by their sequence numbers (the decoder resynchronised after each gap).
+    pub packets_missing: u64,
+    /// Packets whose sequence number was not after the previous one's (dropped).
+    pub packets_out_of_order: u64,
+    /// Depth images used.
+    pub depth_images: u64,
+    /// CameraInfo messages received.
+    pub camera_infos: u64,
+    /// Samples that could not be used, by kind.
+    pub unusable: std::collections::BTreeMap<String, u64>,
+    /// The latest estimate of ROS time minus the event camera's time, nanoseconds.
+    pub clock_offset_ns: Option<i64>,
 }
 
 /// The live event camera as the status reports it.

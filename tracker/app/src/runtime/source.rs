@@ -7,12 +7,13 @@
 //! [`SourceOutput`]. It runs on a blocking thread of the runtime and returns when its stream ends or when
 //! [`StopFlag::is_set`] says so.
 
+pub use super::health::Ros2Stats;
+
 use super::health::{CameraHealth, Health};
 use super::queue::{Ingest, IngestQueue};
 use drivers::anomaly::DecodeAnomalies;
 use drivers::event::{CdEvent, TriggerEdge};
 use drivers::recording::DepthFrame;
-use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -97,27 +98,6 @@ pub struct UsbStats {
     pub max_ring_filled: u64,
     /// The latest problem with the camera, while it lasts.
     pub last_error: Option<String>,
-}
-
-/// What the ROS 2 source received (the summary's `ros2:` line, the status).
-#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
-pub struct Ros2Stats {
-    /// Event packets decoded.
-    pub packets: u64,
-    /// EVT3 bytes in them.
-    pub bytes: u64,
-    /// Packets missing by their sequence numbers (the decoder resynchronised after each gap).
-    pub packets_missing: u64,
-    /// Packets whose sequence number was not after the previous one's (dropped).
-    pub packets_out_of_order: u64,
-    /// Depth images used.
-    pub depth_images: u64,
-    /// CameraInfo messages received.
-    pub camera_infos: u64,
-    /// Samples that could not be used, by kind.
-    pub unusable: BTreeMap<String, u64>,
-    /// The latest estimate of ROS time minus the event camera's time, nanoseconds.
-    pub clock_offset_ns: Option<i64>,
 }
 
 impl SourceStats {
