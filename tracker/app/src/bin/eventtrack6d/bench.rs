@@ -25,7 +25,7 @@ use tracker::track::DepthTransport;
 /// docs/evaluation.md.
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Suite: a name `hil-sim suite` knows (`dev`, `holdout`, `smoke`, `multi`; generated or reused under
+    /// Suite: a name `hil-sim suite` knows (`dev`, `holdout`, `smoke`, `multi`, `fast`; generated or reused under
     /// --suites-dir) or a directory of recordings (with or without suite.json).
     #[arg(long, value_name = "NAME|DIR")]
     pub suite: String,
