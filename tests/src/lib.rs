@@ -10,3 +10,5 @@ pub mod rosbags;
 pub mod tick_fixture;
 /// The test VM with the kernel's USB/IP host side (`tests/vm/`).
 pub mod vm;
+/// A real-time run held until a test's zenoh session is connected, and that session.
+pub mod zenoh_run;

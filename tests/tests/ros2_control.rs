@@ -29,13 +29,13 @@ use eventtrack6d::publish::ros2::diagnostic::decode_diagnostic_array;
 use eventtrack6d::publish::ros2::{
     self, Attachment, RosTime, decode_pose_stamped, encode_pose_stamped, trigger, types,
 };
-use eventtrack6d::runtime::{self, Hooks, StopFlag};
+use eventtrack6d::runtime;
+use eventtrack6d_tests::zenoh_run::{HeldRun, free_port, peer_session};
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use nalgebra::{Isometry3, Translation3, Vector3};
 use std::collections::BTreeMap;
-use std::net::TcpListener;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 use tracker::recording::{PoseTrack, recording_ticks};
@@ -57,24 +57,6 @@ const CLIENT_SEQUENCE: i64 = 41;
 const CLIENT_GID: [u8; ros2::GID_LEN] = [
     0xc1, 0x1e, 0x47, 0x00, 0x01, 0x02, 0x03, 0x04, 0x05, 0x06, 0x07, 0x08, 0x09, 0x0a, 0x0b, 0x0c,
 ];
-
-fn free_port() -> u16 {
-    let l = TcpListener::bind("127.0.0.1:0").expect("bind an ephemeral port");
-    l.local_addr().expect("local addr").port()
-}
-
-/// A peer session that connects to `endpoint` only: loopback, multicast scouting off.
-fn client_session(endpoint: &str) -> zenoh::Session {
-    let mut c = zenoh::Config::default();
-    c.insert_json5("mode", "\"peer\"").unwrap();
-    c.insert_json5("connect/endpoints", &format!("[\"{endpoint}\"]"))
-        .unwrap();
-    c.insert_json5("listen/endpoints", "[\"tcp/127.0.0.1:0\"]")
-        .unwrap();
-    c.insert_json5("scouting/multicast/enabled", "false")
-        .unwrap();
-    zenoh::open(c).wait().expect("open the client session")
-}
 
 /// What the topics said about one tick.
 #[derive(Debug, Clone, Default)]
@@ -193,23 +175,10 @@ congestion_control = "block"
     );
     let config = runtime::config::from_toml(&toml, "ros2_control.toml").unwrap();
 
-    // The runtime announces that its sinks are up, then waits until the client is connected.
-    let (ready_tx, ready_rx) = mpsc::channel::<()>();
-    let (go_tx, go_rx) = mpsc::channel::<()>();
-    let hooks = Hooks {
-        before_start: Some(Box::new(move || {
-            let _ = ready_tx.send(());
-            let _ = go_rx.recv_timeout(Duration::from_secs(60));
-        })),
-        stop: StopFlag::new(),
-        ..Hooks::default()
-    };
-    let runner = std::thread::spawn(move || runtime::run(&config, hooks));
-    ready_rx
-        .recv_timeout(Duration::from_secs(120))
-        .expect("the runtime never came up");
+    // The run's sinks come up; its source waits until this test's session is connected.
+    let run = HeldRun::start(config);
 
-    let session = client_session(&format!("tcp/127.0.0.1:{port}"));
+    let session = peer_session(&format!("tcp/127.0.0.1:{port}"));
     let (seen_tx, seen_rx) = mpsc::channel::<Seen>();
     let pose_tx = seen_tx.clone();
     let _pose_sub = session
@@ -234,24 +203,7 @@ congestion_control = "block"
         })
         .wait()
         .unwrap();
-    let status_sub = session
-        .declare_subscriber("eventtrack6d/status")
-        .wait()
-        .unwrap();
-    // Connected once the runtime's periodic status puts arrive; then let the subscriptions settle.
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while status_sub
-        .recv_timeout(Duration::from_millis(100))
-        .unwrap()
-        .is_none()
-    {
-        assert!(
-            Instant::now() < deadline,
-            "no status put reached the client session"
-        );
-    }
-    std::thread::sleep(Duration::from_millis(300));
-    go_tx.send(()).unwrap();
+    run.release_when_connected(&session, "eventtrack6d/status");
 
     let mut views: BTreeMap<i64, TickView> = BTreeMap::new();
     let set_pose_key = ros2::typed_key_expr(
@@ -270,7 +222,7 @@ congestion_control = "block"
         assert!(Instant::now() < deadline, "the run did not end in time");
         match seen_rx.recv_timeout(Duration::from_millis(200)) {
             Ok(seen) => TickView::take(&mut views, seen),
-            Err(_) if runner.is_finished() => break,
+            Err(_) if run.is_finished() => break,
             Err(_) => {}
         }
         let complete: Vec<i64> = views
@@ -346,7 +298,7 @@ congestion_control = "block"
             reset = Some((response, tick));
         }
     }
-    let summary = runner.join().unwrap().expect("the run failed");
+    let summary = run.join().expect("the run failed");
     let complete: Vec<(i64, &TickView)> = views
         .iter()
         .filter(|(_, v)| v.complete())

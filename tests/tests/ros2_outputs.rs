@@ -12,15 +12,15 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use eventtrack6d::publish::ros2::{self, Attachment, types};
-use eventtrack6d::runtime::{self, Hooks, StopFlag};
+use eventtrack6d::runtime;
 use eventtrack6d_tests::rosbags::rosbags_decode;
 use eventtrack6d_tests::tick_fixture::mug_and_can_recording;
+use eventtrack6d_tests::zenoh_run::{HeldRun, free_port, peer_session};
 use nalgebra::{Isometry3, Point3, Quaternion, Translation3, UnitQuaternion};
 use scene::mesh::{MeshLoadOptions, load_obj};
 use serde_json::{Value, json};
 use std::collections::BTreeMap;
-use std::net::TcpListener;
-use std::sync::{Arc, Mutex, mpsc};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tracker::recording::{POSE_CSV_HEADER, PoseTrack, recording_ticks};
 use zenoh::Wait;
@@ -31,24 +31,6 @@ const NODE: &str = "eventtrack6d";
 const MAPPED: (&str, &str) = ("can", "can_link");
 /// How far from its true first pose the can starts, metres (camera frame): out of view.
 const LOST_OFFSET_M: [f64; 3] = [1.0, 0.0, 0.0];
-
-fn free_port() -> u16 {
-    let l = TcpListener::bind("127.0.0.1:0").expect("bind an ephemeral port");
-    l.local_addr().expect("local addr").port()
-}
-
-/// A peer session that connects to `endpoint` only: loopback, multicast scouting off.
-fn subscriber_session(endpoint: &str) -> zenoh::Session {
-    let mut c = zenoh::Config::default();
-    c.insert_json5("mode", "\"peer\"").unwrap();
-    c.insert_json5("connect/endpoints", &format!("[\"{endpoint}\"]"))
-        .unwrap();
-    c.insert_json5("listen/endpoints", "[\"tcp/127.0.0.1:0\"]")
-        .unwrap();
-    c.insert_json5("scouting/multicast/enabled", "false")
-        .unwrap();
-    zenoh::open(c).wait().expect("open the subscriber session")
-}
 
 /// One sample as it arrived: key, payload, attachment.
 type Sample = (String, Vec<u8>, Option<Vec<u8>>);
@@ -318,23 +300,10 @@ tf_child_frames = {{ {} = "{}" }}
     );
     let config = runtime::config::from_toml(&toml, "ros2_outputs.toml").unwrap();
 
-    // The runtime announces that its sinks are up, then waits until the subscriber is connected.
-    let (ready_tx, ready_rx) = mpsc::channel::<()>();
-    let (go_tx, go_rx) = mpsc::channel::<()>();
-    let hooks = Hooks {
-        before_start: Some(Box::new(move || {
-            let _ = ready_tx.send(());
-            let _ = go_rx.recv_timeout(Duration::from_secs(60));
-        })),
-        stop: StopFlag::new(),
-        ..Hooks::default()
-    };
-    let runner = std::thread::spawn(move || runtime::run(&config, hooks));
-    ready_rx
-        .recv_timeout(Duration::from_secs(120))
-        .expect("the runtime never came up");
+    // The run's sinks come up; its source waits until this test's session is connected.
+    let run = HeldRun::start(config);
 
-    let session = subscriber_session(&format!("tcp/127.0.0.1:{port}"));
+    let session = peer_session(&format!("tcp/127.0.0.1:{port}"));
     // The keys as rmw_zenoh spells them (docs/zenoh-ros2.md): domain 0, topic without its leading '/', the type.
     let keys = [
         ros2::typed_key_expr(0, "/tf", &types::TF_MESSAGE),
@@ -360,26 +329,9 @@ tf_child_frames = {{ {} = "{}" }}
                 .unwrap()
         })
         .collect();
-    let status_sub = session
-        .declare_subscriber("eventtrack6d/status")
-        .wait()
-        .unwrap();
-    // Connected once the runtime's periodic status puts arrive; then let the subscriptions settle.
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while status_sub
-        .recv_timeout(Duration::from_millis(100))
-        .unwrap()
-        .is_none()
-    {
-        assert!(
-            Instant::now() < deadline,
-            "no status put reached the subscriber session"
-        );
-    }
-    std::thread::sleep(Duration::from_millis(300));
-    go_tx.send(()).unwrap();
+    run.release_when_connected(&session, "eventtrack6d/status");
 
-    let summary = runner.join().unwrap().expect("the run failed");
+    let summary = run.join().expect("the run failed");
     // The last samples may still be on their way.
     let deadline = Instant::now() + Duration::from_secs(5);
     while received

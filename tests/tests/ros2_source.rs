@@ -9,17 +9,12 @@ use eventtrack6d::runtime::ros2::{PlaybackEndpoints, playback_config};
 use eventtrack6d::runtime::setup::recording_scene;
 use eventtrack6d::runtime::{self, Hooks, build_tracker};
 use eventtrack6d_tests::tick_fixture::mug_and_can_recording;
+use eventtrack6d_tests::zenoh_run::free_port;
 use hil_sim::ros2_play::{Pace, Ros2PlayOptions, SessionMode, SessionOptions, Topics, play};
 use scene::render::RendererKind;
-use std::net::TcpListener;
 use std::time::Duration;
 use tracker::recording::{PoseRow, parse_pose_csv};
 use tracker::track::{OfflineTiming, TrackerConfig, track_recording_timed};
-
-fn free_port() -> u16 {
-    let l = TcpListener::bind("127.0.0.1:0").unwrap();
-    l.local_addr().unwrap().port()
-}
 
 #[test]
 fn ros2_play_into_the_ros2_source_gives_the_offline_poses_exactly() {

@@ -9,37 +9,18 @@
 
 use drivers::recording::Recording;
 use eventtrack6d::publish::ros2::{self, Attachment, decode_pose_stamped};
-use eventtrack6d::runtime::{self, Hooks, StopFlag};
+use eventtrack6d::runtime;
 use eventtrack6d_tests::dbc::{
     DbcDecoder, DbcPoseReader, check_candump_against_csv, parse_candump_line,
 };
+use eventtrack6d_tests::zenoh_run::{HeldRun, free_port, peer_session};
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
 use std::collections::HashMap;
-use std::net::TcpListener;
-use std::sync::mpsc;
 use std::time::{Duration, Instant};
 use tracker::recording::{PoseRecord, parse_pose_csv, recording_ticks};
 use zenoh::Wait;
-
-fn free_port() -> u16 {
-    let l = TcpListener::bind("127.0.0.1:0").expect("bind an ephemeral port");
-    l.local_addr().expect("local addr").port()
-}
-
-/// A peer session that connects to `endpoint` only: loopback, multicast scouting off.
-fn subscriber_session(endpoint: &str) -> zenoh::Session {
-    let mut c = zenoh::Config::default();
-    c.insert_json5("mode", "\"peer\"").unwrap();
-    c.insert_json5("connect/endpoints", &format!("[\"{endpoint}\"]"))
-        .unwrap();
-    c.insert_json5("listen/endpoints", "[\"tcp/127.0.0.1:0\"]")
-        .unwrap();
-    c.insert_json5("scouting/multicast/enabled", "false")
-        .unwrap();
-    zenoh::open(c).wait().expect("open the subscriber session")
-}
 
 /// Quaternion (x, y, z, w) with w >= 0 (q and -q are the same rotation).
 fn canonical(q: [f64; 4]) -> [f64; 4] {
@@ -108,45 +89,15 @@ candump_log = "poses.candump.log"
     // (with the default "drop" a starved machine once lost 4 of 72 samples here; the publisher counted them sent).
     let config = runtime::config::from_toml(&toml, "e2e.toml").unwrap();
 
-    // The runtime announces that its sinks are up, then waits until the subscriber is connected.
-    let (ready_tx, ready_rx) = mpsc::channel::<()>();
-    let (go_tx, go_rx) = mpsc::channel::<()>();
-    let hooks = Hooks {
-        before_start: Some(Box::new(move || {
-            let _ = ready_tx.send(());
-            let _ = go_rx.recv_timeout(Duration::from_secs(60));
-        })),
-        stop: StopFlag::new(),
-        ..Hooks::default()
-    };
-    let runner = std::thread::spawn(move || runtime::run(&config, hooks));
-    ready_rx
-        .recv_timeout(Duration::from_secs(120))
-        .expect("the runtime never came up");
+    // The run's sinks come up; its source waits until this test's session is connected.
+    let run = HeldRun::start(config);
 
-    let session = subscriber_session(&format!("tcp/127.0.0.1:{port}"));
+    let session = peer_session(&format!("tcp/127.0.0.1:{port}"));
     let poses_sub = session
         .declare_subscriber(ros2::pose_stamped_key_expr(0, "eventtrack6d/can/pose"))
         .wait()
         .unwrap();
-    let status_sub = session
-        .declare_subscriber("eventtrack6d/status")
-        .wait()
-        .unwrap();
-    // Connected once the runtime's periodic status puts arrive; then let the pose subscription settle.
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while status_sub
-        .recv_timeout(Duration::from_millis(100))
-        .unwrap()
-        .is_none()
-    {
-        assert!(
-            Instant::now() < deadline,
-            "no status put reached the subscriber session"
-        );
-    }
-    std::thread::sleep(Duration::from_millis(300));
-    go_tx.send(()).unwrap();
+    run.release_when_connected(&session, "eventtrack6d/status");
 
     let mut received = Vec::new();
     loop {
@@ -157,11 +108,11 @@ candump_log = "poses.candump.log"
                 payload: s.payload().to_bytes().into_owned(),
                 attachment: s.attachment().map(|a| a.to_bytes().into_owned()),
             }),
-            None if runner.is_finished() => break,
+            None if run.is_finished() => break,
             None => {}
         }
     }
-    let summary = runner.join().unwrap().expect("the run failed");
+    let summary = run.join().expect("the run failed");
 
     // Every tick of the recording was published, nothing dropped.
     assert_eq!(summary.ticks, ticks.len() as u64, "{summary}");
