@@ -61,3 +61,60 @@ pub fn rosbags_decode(ty: &str, payloads: &[Vec<u8>]) -> Vec<Value> {
     assert_eq!(decoded.len(), payloads.len(), "{out}");
     decoded
 }
+
+/// Checks rosbags' JSON of a message (`actual`) against the expected one, field by field: the same fields at every
+/// level (none missing, none extra), integers, strings, booleans and hex byte arrays equal, and floats (rosbags
+/// writes them as Python's repr, which parses back exactly; expected: JSON numbers) equal to the bit, or within
+/// `tolerance(path)` where that gives one (a value computed differently on each side).
+pub fn assert_fields_within(
+    actual: &Value,
+    expected: &Value,
+    path: &str,
+    tolerance: &dyn Fn(&str) -> Option<f64>,
+) {
+    match expected {
+        Value::Object(exp) => {
+            let Value::Object(act) = actual else {
+                panic!("{path}: rosbags gives {actual}, expected a message {expected}");
+            };
+            let act_keys: Vec<&String> = act.keys().collect();
+            let exp_keys: Vec<&String> = exp.keys().collect();
+            assert_eq!(act_keys, exp_keys, "{path}: fields (rosbags vs expected)");
+            for (k, v) in exp {
+                assert_fields_within(&act[k], v, &format!("{path}.{k}"), tolerance);
+            }
+        }
+        Value::Array(exp) => {
+            let Value::Array(act) = actual else {
+                panic!("{path}: rosbags gives {actual}, expected a list {expected}");
+            };
+            assert_eq!(act.len(), exp.len(), "{path}: length (rosbags vs expected)");
+            for (i, (a, e)) in act.iter().zip(exp).enumerate() {
+                assert_fields_within(a, e, &format!("{path}[{i}]"), tolerance);
+            }
+        }
+        Value::Number(n) if n.is_f64() => {
+            let e = n.as_f64().unwrap_or(f64::NAN);
+            let Some(a) = actual.as_str().and_then(|s| s.parse::<f64>().ok()) else {
+                panic!("{path}: rosbags gives {actual}, expected a float {e:?}");
+            };
+            match tolerance(path) {
+                Some(tol) => assert!(
+                    (a - e).abs() <= tol,
+                    "{path}: rosbags reads {a:?}, expected {e:?} within {tol:e}"
+                ),
+                None => assert_eq!(
+                    a.to_bits(),
+                    e.to_bits(),
+                    "{path}: rosbags reads {actual} ({a:?}), expected {e:?}"
+                ),
+            }
+        }
+        _ => assert_eq!(actual, expected, "{path}: rosbags vs expected"),
+    }
+}
+
+/// [`assert_fields_within`] with every float equal to the bit.
+pub fn assert_fields(actual: &Value, expected: &Value, path: &str) {
+    assert_fields_within(actual, expected, path, &|_| None);
+}

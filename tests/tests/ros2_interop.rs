@@ -9,7 +9,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use eventtrack6d_tests::rosbags::{rosbags, rosbags_decode, script};
+use eventtrack6d_tests::rosbags::{assert_fields, rosbags, rosbags_decode, script};
 use ros2::diagnostic::{
     DiagnosticArray, DiagnosticStatus, decode_diagnostic_array, encode_diagnostic_array, level,
 };
@@ -38,46 +38,6 @@ fn rosbags_encode(ty: &str, msg: &Value) -> Vec<u8> {
 }
 
 // --- comparing ---------------------------------------------------------------------------------------------------
-
-/// Checks rosbags' JSON of a message (`actual`) against the expected one, field by field: the same fields at every
-/// level (none missing, none extra), integers, strings, booleans and hex byte arrays equal, and floats (rosbags
-/// writes them as Python's repr, which parses back exactly; expected: JSON numbers) equal to the bit.
-fn assert_fields(actual: &Value, expected: &Value, path: &str) {
-    match expected {
-        Value::Object(exp) => {
-            let Value::Object(act) = actual else {
-                panic!("{path}: rosbags gives {actual}, expected a message {expected}");
-            };
-            let act_keys: Vec<&String> = act.keys().collect();
-            let exp_keys: Vec<&String> = exp.keys().collect();
-            assert_eq!(act_keys, exp_keys, "{path}: fields (rosbags vs expected)");
-            for (k, v) in exp {
-                assert_fields(&act[k], v, &format!("{path}.{k}"));
-            }
-        }
-        Value::Array(exp) => {
-            let Value::Array(act) = actual else {
-                panic!("{path}: rosbags gives {actual}, expected a list {expected}");
-            };
-            assert_eq!(act.len(), exp.len(), "{path}: length (rosbags vs expected)");
-            for (i, (a, e)) in act.iter().zip(exp).enumerate() {
-                assert_fields(a, e, &format!("{path}[{i}]"));
-            }
-        }
-        Value::Number(n) if n.is_f64() => {
-            let e = n.as_f64().unwrap();
-            let Some(a) = actual.as_str().and_then(|s| s.parse::<f64>().ok()) else {
-                panic!("{path}: rosbags gives {actual}, expected a float {e:?}");
-            };
-            assert_eq!(
-                a.to_bits(),
-                e.to_bits(),
-                "{path}: rosbags reads {actual} ({a:?}), we wrote {e:?}"
-            );
-        }
-        _ => assert_eq!(actual, expected, "{path}: rosbags vs expected"),
-    }
-}
 
 /// rosbags' encoding equals ours byte for byte; otherwise the first difference, with the bytes around it.
 fn assert_same_bytes(ty: &str, theirs: &[u8], ours: &[u8]) {
