@@ -159,3 +159,34 @@ fn mug_tracker(
     let tracker = EventTrack6d::new(config, rig, all, renderer).expect("tracker");
     (tracker, first.t_us)
 }
+
+/// Tracks `rec` offline with `tracker` as `bench` does, from `timing`, and returns every estimate as its pose CSV
+/// row (in output order) and what the offline driver did: the reference the runtime's runs are compared against.
+pub fn offline_pose_rows(
+    rec: &Recording,
+    tracker: &mut dyn PoseTracker,
+    timing: tracker::track::OfflineTiming,
+) -> (Vec<String>, tracker::track::OfflineStats) {
+    let names = tracker.objects().to_vec();
+    let mut rows = Vec::new();
+    let stats = tracker::track::track_recording_timed(
+        rec,
+        tracker,
+        timing,
+        |_, estimates, _| {
+            rows.extend(estimates.iter().map(|e| {
+                tracker::recording::PoseRow {
+                    t_us: e.t_us,
+                    object: &names[e.object],
+                    pose: &e.pose,
+                    quality: e.quality,
+                    state: e.state.as_str(),
+                }
+                .to_string()
+            }));
+        },
+        |_| {},
+    )
+    .expect("offline tracking");
+    (rows, stats)
+}

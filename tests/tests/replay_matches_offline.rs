@@ -8,13 +8,12 @@
 
 use eventtrack6d::runtime::setup::recording_scene;
 use eventtrack6d::runtime::{self, Hooks, build_tracker};
-use eventtrack6d_tests::tick_fixture::{mug_and_can_recording, mug_recording, steady_tracker};
-use scene::render::{CpuRenderer, RendererKind};
-use tracker::recording::{PoseRow, parse_pose_csv};
-use tracker::track::{
-    DepthHandling, OfflineTiming, PoseTracker, TrackerConfig, TrackerCounters,
-    track_recording_timed,
+use eventtrack6d_tests::tick_fixture::{
+    mug_and_can_recording, mug_recording, offline_pose_rows, steady_tracker,
 };
+use scene::render::{CpuRenderer, RendererKind};
+use tracker::recording::parse_pose_csv;
+use tracker::track::{DepthHandling, OfflineTiming, PoseTracker, TrackerConfig, TrackerCounters};
 
 /// A pushed depth frame moves into the tracker, which hands back the frame it held: the samples are never
 /// copied (an 848x480 frame is 1.6 MB, on the depth tick's latency).
@@ -204,32 +203,12 @@ fn compare_replay_with_offline(
         &rec.meta.trigger.timeline_config(),
     )
     .unwrap();
-    let names = tracker.objects().to_vec();
-    let mut offline = Vec::new();
     let timing = OfflineTiming {
         start_us: scene.objects[0].first_pose.0,
         depth_latency_us: latency_us,
         depth_jitter_us: jitter_us,
     };
-    let stats = track_recording_timed(
-        &rec,
-        tracker.as_mut(),
-        timing,
-        |_, estimates, _| {
-            offline.extend(estimates.iter().map(|e| {
-                PoseRow {
-                    t_us: e.t_us,
-                    object: &names[e.object],
-                    pose: &e.pose,
-                    quality: e.quality,
-                    state: e.state.as_str(),
-                }
-                .to_string()
-            }));
-        },
-        |_| {},
-    )
-    .unwrap();
+    let (offline, stats) = offline_pose_rows(&rec, tracker.as_mut(), timing);
     assert!(stats.ticks >= 50 && stats.depth_frames >= 11, "{stats:?}");
     let offline_counters = tracker.tracker_counters().expect("the tracker counts");
 

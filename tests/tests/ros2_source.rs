@@ -8,13 +8,13 @@
 use eventtrack6d::runtime::ros2::{PlaybackEndpoints, playback_config};
 use eventtrack6d::runtime::setup::recording_scene;
 use eventtrack6d::runtime::{self, Hooks, build_tracker};
-use eventtrack6d_tests::tick_fixture::mug_and_can_recording;
+use eventtrack6d_tests::tick_fixture::{mug_and_can_recording, offline_pose_rows};
 use eventtrack6d_tests::zenoh_run::free_port;
 use hil_sim::ros2_play::{Pace, Ros2PlayOptions, SessionMode, SessionOptions, Topics, play};
 use scene::render::RendererKind;
 use std::time::Duration;
-use tracker::recording::{PoseRow, parse_pose_csv};
-use tracker::track::{OfflineTiming, TrackerConfig, track_recording_timed};
+use tracker::recording::parse_pose_csv;
+use tracker::track::{OfflineTiming, TrackerConfig};
 
 #[test]
 fn ros2_play_into_the_ros2_source_gives_the_offline_poses_exactly() {
@@ -49,32 +49,12 @@ fn ros2_play_into_the_ros2_source_gives_the_offline_poses_exactly() {
         &s.timeline_config(),
     )
     .unwrap();
-    let names = tracker.objects().to_vec();
-    let mut offline = Vec::new();
     let timing = OfflineTiming {
         start_us: scene.objects[0].first_pose.0,
         depth_latency_us: 0,
         depth_jitter_us: 0,
     };
-    let stats = track_recording_timed(
-        &rec,
-        tracker.as_mut(),
-        timing,
-        |_, estimates, _| {
-            offline.extend(estimates.iter().map(|e| {
-                PoseRow {
-                    t_us: e.t_us,
-                    object: &names[e.object],
-                    pose: &e.pose,
-                    quality: e.quality,
-                    state: e.state.as_str(),
-                }
-                .to_string()
-            }));
-        },
-        |_| {},
-    )
-    .unwrap();
+    let (offline, stats) = offline_pose_rows(&rec, tracker.as_mut(), timing);
     assert!(stats.depth_frames >= 11, "{stats:?}");
 
     // The runtime waits for the first pulse on the ROS 2 topics; the player waits for its subscription.
