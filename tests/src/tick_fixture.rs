@@ -41,6 +41,22 @@ pub fn mug_recording(dir: &Path, seconds: f64) -> Recording {
     Recording::open(dir).expect("opening the fixture recording")
 }
 
+/// Generates a `seconds`-long fast shake of the mug (about 2 m/s, reversing within tens of milliseconds) into
+/// `dir` (reused if already there), seed 1.
+pub fn fast_mug_recording(dir: &Path, seconds: f64) -> Recording {
+    if Recording::open(dir).is_err() {
+        let cfg = GenerateConfig::new(
+            ObjectSource::Library(ObjectKind::Mug),
+            MotionProfile::Shake,
+            SpeedLevel::Fast,
+            seconds,
+            1,
+        );
+        generate(&cfg, dir, |_| {}).expect("generating the fast fixture recording");
+    }
+    Recording::open(dir).expect("opening the fast fixture recording")
+}
+
 /// Generates a 0.5 s scene into `dir` (reused if already there): the library mug shaken at moderate speed, and a can
 /// on its own moderate shake 15 cm nearer the camera (`hil-sim generate --with can:translation`), seed 5.
 pub fn mug_and_can_recording(dir: &Path) -> Recording {
@@ -134,7 +150,7 @@ pub fn replay_bits(
 
 /// A tracker of `recording`'s mug from its ground-truth pose at the first tick, with `objects - 1` copies of it
 /// beside it, and that tick's time (microseconds).
-fn mug_tracker(
+pub fn mug_tracker(
     recording: &Recording,
     config: TrackerConfig,
     renderer: Box<dyn Renderer + Send>,

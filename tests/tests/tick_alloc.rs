@@ -1,7 +1,7 @@
 //! A tracker tick allocates nothing on the heap in steady state (DESIGN section 3): counted with a global
 //! allocator wrapper around the system allocator (every thread, so the `render-ahead` and object threads count
 //! too), over event, depth and plain ticks, each followed by `prepare_next_tick` as in the runtime, for one
-//! object and for two objects on two threads.
+//! object and for two objects on two threads, and with steps between ticks.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -112,13 +112,12 @@ fn allocations_of_steady_ticks(
 
 /// Counts the heap allocations of 24 steady ticks at 120 Hz (a depth exposure every fourth) whose frames arrive 20
 /// ms late, so that each is tracked again from its exposure, after 48 such ticks of warm-up.
-fn allocations_of_retracking_ticks(rec: &Recording, deferred: bool) -> (usize, TrackerCounters) {
-    let mut s = steady_tracker_of(
-        rec.clone(),
-        TrackerConfig::default(),
-        Box::new(CpuRenderer::new()),
-        1,
-    );
+fn allocations_of_retracking_ticks(
+    rec: &Recording,
+    deferred: bool,
+    config: TrackerConfig,
+) -> (usize, TrackerCounters) {
+    let mut s = steady_tracker_of(rec.clone(), config, Box::new(CpuRenderer::new()), 1);
     let first = s.last_tick;
     let tick_at = |k: u64| drivers::timeline::Tick {
         index: first.index + k,
@@ -210,13 +209,34 @@ fn steady_state_ticks_do_not_allocate() {
     );
     // Late frames tracked again from their exposure: states saved, events logged and wound back and forth.
     for deferred in [false, true] {
-        let (n, counters) = allocations_of_retracking_ticks(&rec, deferred);
+        let (n, counters) =
+            allocations_of_retracking_ticks(&rec, deferred, TrackerConfig::default());
         assert!(counters.late_frames_retracked >= 17, "{counters:?}");
         // The first frame's exposure tick was the fixture's, before any state was saved.
         assert_eq!(counters.late_frames_not_retracked, 1, "{counters:?}");
         assert_eq!(
             n, 0,
             "late depth frames tracked again (deferred: {deferred}): {n} heap allocations in 24 steady-state ticks"
+        );
+    }
+    // Steps between ticks, as the events of each period come, and planned again while tracking again from late
+    // depth frames (every moving object gets the most steps here). In this test, not beside it: the allocation
+    // counter counts every thread of the process, a test running in parallel included.
+    let mut config = TrackerConfig::default();
+    config.inner_steps.inner_step_px = 1e-6;
+    let before = steady_tracker_of(rec.clone(), config.clone(), Box::new(CpuRenderer::new()), 1)
+        .tracker
+        .counters();
+    for deferred in [false, true] {
+        let (n, counters) = allocations_of_retracking_ticks(&rec, deferred, config.clone());
+        assert!(
+            counters.inner_steps >= before.inner_steps + 72,
+            "{before:?} {counters:?}"
+        );
+        assert!(counters.late_frames_retracked >= 17, "{counters:?}");
+        assert_eq!(
+            n, 0,
+            "steps between ticks (deferred: {deferred}): {n} heap allocations in 24 steady-state ticks"
         );
     }
 }

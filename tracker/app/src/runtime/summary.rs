@@ -143,7 +143,8 @@ impl std::fmt::Display for Summary {
         if let Some(c) = &self.tracker {
             writeln!(
                 f,
-                "tracker:         {} re-detections ({} places checked, {} dropped), {} depth fallbacks, {} render errors, {} depth frames unused, {} renders prefetched ({} used)",
+                "tracker:         {} steps between ticks, {} re-detections ({} places checked, {} dropped), {} depth fallbacks, {} render errors, {} depth frames unused, {} renders prefetched ({} used)",
+                c.inner_steps,
                 c.redetections,
                 c.redetect_places_checked,
                 c.redetect_places_dropped,

@@ -19,9 +19,9 @@ mod validate;
 
 pub use clock::TickClock;
 pub use config::{
-    CorrespondConfig, DepthUse, ExecutionConfig, LateDepthConfig, MAX_DEPTH_AGE_LIMIT_MS,
-    ModalityConfig, MotionConfig, OptimiserConfig, QualityConfig, RoiConfig, SafetyNetConfig,
-    TrackerConfig, TrackerParameterKeys, TrackingMethod,
+    CorrespondConfig, DepthUse, ExecutionConfig, InnerStepConfig, LateDepthConfig,
+    MAX_DEPTH_AGE_LIMIT_MS, ModalityConfig, MotionConfig, OptimiserConfig, QualityConfig,
+    RoiConfig, SafetyNetConfig, TrackerConfig, TrackerParameterKeys, TrackingMethod,
 };
 pub use depth_transport::DepthTransport;
 pub use drive::{

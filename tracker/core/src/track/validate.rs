@@ -180,8 +180,21 @@ fn optimiser_checks(config: &TrackerConfig) -> [Check; 6] {
 }
 
 /// The checks of the motion model, in the order they are reported.
-fn motion_checks(config: &TrackerConfig) -> [Check; 5] {
+fn motion_checks(config: &TrackerConfig) -> [Check; 7] {
     [
+        Check::new(
+            "inner_step_px",
+            config.inner_steps.inner_step_px,
+            Rule::NonNegative,
+        ),
+        Check::new(
+            "max_inner_steps",
+            f64::from(config.inner_steps.max_inner_steps),
+            Rule::AtMost(
+                crate::track::config::MAX_INNER_STEPS as f64,
+                "must be at most 7",
+            ),
+        ),
         Check::new(
             "prediction_gain",
             config.motion.prediction_gain,

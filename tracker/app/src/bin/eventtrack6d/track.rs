@@ -306,6 +306,13 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             counters.redetect_places_dropped
         );
     }
+    if counters.inner_steps > 0 {
+        eprintln!(
+            "{} steps between ticks ({:.2} per tick: fast objects refined again as their events came, inner_step_px)",
+            counters.inner_steps,
+            counters.inner_steps as f64 / counters.ticks.max(1) as f64
+        );
+    }
     if counters.renders_prefetched > 0 {
         eprintln!(
             "{} renders started ahead of their tick, {} of them used (the rest rendered again: the tick's ROI or poses differed)",

@@ -63,6 +63,12 @@ impl SurfaceLog {
         self.first + self.entries.len() as u64
     }
 
+    /// The position after the latest logged event at or before `t_us` (events are logged in time order); the
+    /// start of the log when none is.
+    pub fn position_after(&self, t_us: i64) -> u64 {
+        self.first + self.entries.partition_point(|e| e.event.t_us <= t_us) as u64
+    }
+
     /// Whether the surface can be wound back to `position`.
     pub fn reaches(&self, position: u64) -> bool {
         (self.first..=self.end()).contains(&position)

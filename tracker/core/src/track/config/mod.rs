@@ -8,8 +8,8 @@ mod flat_keys;
 mod parameters;
 
 pub use parameters::{
-    CorrespondConfig, ExecutionConfig, LateDepthConfig, ModalityConfig, MotionConfig,
-    OptimiserConfig, RoiConfig, SafetyNetConfig, TrackerConfig, TrackerParameterKeys,
+    CorrespondConfig, ExecutionConfig, InnerStepConfig, LateDepthConfig, ModalityConfig,
+    MotionConfig, OptimiserConfig, RoiConfig, SafetyNetConfig, TrackerConfig, TrackerParameterKeys,
 };
 
 /// When the depth modality is used.
@@ -80,6 +80,10 @@ impl QualityConfig {
 /// Largest [`LateDepthConfig::max_depth_age_ms`]: the span the per-object pose history covers at 120 Hz, less a
 /// tick.
 pub const MAX_DEPTH_AGE_LIMIT_MS: f64 = 500.0;
+
+/// Largest [`InnerStepConfig::max_inner_steps`]: the pose history keeps 64 ticks' estimates with this many steps
+/// between each two.
+pub const MAX_INNER_STEPS: u32 = 7;
 
 /// A named tracking method: ours or one of the baselines, all on the same tracker code.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -5,6 +5,8 @@
 pub struct TrackerCounters {
     /// Ticks processed.
     pub ticks: u64,
+    /// Steps between ticks run ([`crate::track::InnerStepConfig`]), not counting those tracked again.
+    pub inner_steps: u64,
     /// Depth frames used.
     pub depth_frames: u64,
     /// Depth frames not used: replaced by a newer frame before a tick, or older than `max_depth_age_ms` at the

@@ -9,7 +9,7 @@ use super::next_tick::NextTick;
 use super::place_check::ProbeSet;
 use super::renderers::Renderers;
 use super::setup::{TrackError, TrackedObject, TrackingRig};
-use super::step::{ObjectStep, own_share};
+use super::step::ObjectStep;
 use crate::recon::EventSurface;
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::estimate::{PoseEstimate, TrackingState};
@@ -36,6 +36,8 @@ pub(super) struct TickEngine {
     pub depth: DepthFrame,
     pub depth_t_us: Option<i64>,
     pub last_tick_us: Option<i64>,
+    /// Whether a step between ticks ran since the latest tick.
+    pub inner_since_tick: bool,
     /// When the next tick is expected (for the renders prefetched for it).
     pub next_tick: NextTick,
     pub counters: TrackerCounters,
@@ -101,6 +103,7 @@ impl TickEngine {
             scene,
             depth_t_us: None,
             last_tick_us: None,
+            inner_since_tick: false,
             next_tick: NextTick::new(rig.clock),
             counters: TrackerCounters::default(),
             redetection,
@@ -207,60 +210,11 @@ impl TickEngine {
         true
     }
 
-    /// Starts each object's render for the next tick, at the times it may come ([`NextTick::candidates`]), unless
-    /// the tracker refines only at depth frames ([`crate::track::ExecutionConfig::prefetch_renders`]).
-    pub fn prefetch_renders(&mut self) {
-        if !(self.config.execution.prefetch_renders && self.refines(false)) {
-            return;
-        }
-        // What the last tick did not take, the next one will not either.
-        self.renderers.forget_prefetched();
-        let (times, count) = self.next_tick.candidates();
-        for &t in &times[..count] {
-            self.prefetch_next(t);
-        }
-    }
-
-    /// Starts each object's render for the tick expected at `next_t_us`, at the pose that tick will predict, in the
-    /// ROI it will choose without a depth frame. A failed prefetch is not reported here: the next tick renders
-    /// again and counts the error then.
-    fn prefetch_next(&mut self, next_t_us: i64) {
-        for (s, o) in self.scene.iter_mut().zip(&self.objects) {
-            let step = (next_t_us - o.state.t_us) as f64 * 1e-6;
-            s.pose = o.state.prediction(&o.model, step.max(0.0), &self.config);
-        }
-        let scene = Scene::objects(&self.scene)
-            .geometry_only()
-            .normals_on_surface_grid(self.config.correspond.max_surface_points);
-        let camera = &self.rig.event_camera;
-        // Each object's render is made ahead by the renderer that will step it ([`ObjectStep::run_split`]).
-        let share = own_share(self.objects.len(), self.renderers.workers.len());
-        let renderers =
-            std::iter::once(&mut self.renderers.main).chain(&mut self.renderers.workers);
-        for ((objects, poses), renderer) in self
-            .objects
-            .chunks(share.max(1))
-            .zip(self.scene.chunks(share.max(1)))
-            .zip(renderers)
-        {
-            for (o, s) in objects.iter().zip(poses) {
-                if next_t_us < o.state.t_us {
-                    continue;
-                }
-                if let Some(roi) =
-                    o.state
-                        .roi_at(&o.model, &s.pose, camera, &self.config, next_t_us, false)
-                {
-                    let _ = renderer.prefetch_roi(&scene, camera, &roi);
-                }
-            }
-        }
-    }
-
     /// One tick of every object, as its phases, and the estimates into `out`. `live` is false for a tick tracked
     /// again from a late frame's exposure (its time is not the clock's).
     pub fn step_tick(&mut self, tick: &Tick, out: &mut Vec<PoseEstimate>, live: bool) {
         let t_us = tick.t_us;
+        let previous_tick_us = self.last_tick_us;
         let dt_s = self.advance_clock(t_us, live);
         let exposed_us = self.depth_for_tick(t_us);
         let depth_now = exposed_us.is_some();
@@ -269,7 +223,9 @@ impl TickEngine {
         if refines && self.config.redetect.enabled {
             self.detect(t_us, exposed_us, dt_s);
         }
-        self.step_objects(t_us, dt_s, exposed_us, refines);
+        let velocity_since_us = previous_tick_us.filter(|_| self.inner_since_tick);
+        self.step_objects(t_us, dt_s, exposed_us, refines, velocity_since_us, None);
+        self.inner_since_tick = false;
         if depth_now {
             self.counters.depth_frames += 1;
             self.depth_t_us = None;
@@ -281,6 +237,23 @@ impl TickEngine {
             quality: o.state.quality,
             state: o.state.reported.get(),
         }));
+    }
+
+    /// A step between ticks at `t_us` ([`crate::track::InnerStepConfig`]), on the events up to it: the objects that
+    /// are not `lost` and move at least `inner_step_px` per tick at their smoothed velocity are predicted and stepped (correspond, optimise) without depth frame or re-detection, their
+    /// quality and state left as the latest tick assessed them. Nothing is handed out; the next tick starts from
+    /// these estimates. Nothing happens before the first tick, at or before the latest one, or when the tracker
+    /// refines only at depth frames.
+    pub fn step_inner(&mut self, t_us: i64) {
+        if self.last_tick_us.is_none_or(|t| t_us <= t) || !self.refines(false) {
+            return;
+        }
+        self.inner_since_tick = true;
+        self.counters.inner_steps += 1;
+        self.predict(t_us);
+        let min_speed = self.config.inner_steps.inner_step_px / self.rig.clock.period_s();
+        let dt_s = (t_us - self.last_tick_us.unwrap_or(t_us)) as f64 * 1e-6;
+        self.step_objects(t_us, dt_s, None, true, None, Some(min_speed));
     }
 
     /// The clock phase: the seconds since the previous tick (one nominal period at the first), recorded for the
@@ -364,13 +337,25 @@ impl TickEngine {
     }
 
     /// The step of every object at `t_us` (correspond, optimise, assess; see [`crate::track::object`]), split over
-    /// the renderers' threads, with the depth frame exposed at `exposed_us` if this tick uses one. Renders that
-    /// fail are counted.
-    fn step_objects(&mut self, t_us: i64, dt_s: f64, exposed_us: Option<i64>, refines: bool) {
+    /// the renderers' threads, with the depth frame exposed at `exposed_us` if this tick uses one. At a tick after
+    /// steps between ticks, `velocity_since_us` is the previous tick's time; at a step between ticks,
+    /// `inner_min_speed` is the image speed (pixels per second) an object needs to be stepped. Renders that fail
+    /// are counted.
+    fn step_objects(
+        &mut self,
+        t_us: i64,
+        dt_s: f64,
+        exposed_us: Option<i64>,
+        refines: bool,
+        velocity_since_us: Option<i64>,
+        inner_min_speed: Option<f64>,
+    ) {
         let depth_now = exposed_us.is_some();
         let inputs = TickInputs {
             t_us,
             dt_s,
+            inner: inner_min_speed.is_some(),
+            velocity_since_us,
             depth: depth_now.then_some(&self.depth),
             depth_exposed_us: exposed_us.unwrap_or(t_us),
             surface: &self.surface,
@@ -388,6 +373,8 @@ impl TickEngine {
             inputs,
             refines,
             depth_now,
+            own_span: self.inner_since_tick,
+            inner_min_speed,
         };
         self.counters.render_errors += step.run_split(&mut self.objects, &mut self.renderers);
     }

@@ -318,6 +318,8 @@ impl Redetection {
             inputs: TickInputs {
                 t_us: frame_t_us,
                 dt_s,
+                inner: false,
+                velocity_since_us: None,
                 depth: Some(frame.depth),
                 depth_exposed_us: frame_t_us,
                 surface: frame.surface,

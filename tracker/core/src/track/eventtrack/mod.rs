@@ -6,15 +6,18 @@
 //! - [`build`]: the objects set up from their meshes and first poses; [`renderers`]: the renderers and threads.
 //! - [`lost_search`], [`place_check`]: re-detection of objects the tracker fell off.
 //! - [`retrack`]: tracking again from a late depth frame's exposure.
+//! - [`inner`]: the steps between ticks; [`prefetch`]: renders started ahead of the step that takes them.
 //! - This file: [`EventTrack6d`], the [`PoseTracker`] the runtime and the offline driver drive, which hands depth
 //!   frames, late ones included, to the engine as [`DepthHandling`] says.
 
 mod build;
 mod counters;
 mod engine;
+mod inner;
 mod lost_search;
 mod next_tick;
 mod place_check;
+mod prefetch;
 mod renderers;
 mod retrack;
 mod setup;
@@ -31,6 +34,7 @@ use drivers::event::CdEvent;
 use drivers::recording::DepthFrame;
 use drivers::timeline::Tick;
 use engine::TickEngine;
+use inner::InnerPlan;
 use nalgebra::{Isometry3, Vector3};
 use retrack::{Deferred, Retrack};
 use scene::mesh::Simplification;
@@ -49,6 +53,8 @@ pub struct EventTrack6d {
     /// A late frame handed over with [`DepthHandling::AfterNextTick`] or [`DepthHandling::CarryOnly`]: the next
     /// tick carries it, and this is its exposure from then until it is tracked again from there after that tick.
     deferred: Deferred,
+    /// The steps between the latest tick and the next ([`crate::track::InnerStepConfig`]).
+    inner: InnerPlan,
 }
 
 impl std::fmt::Debug for EventTrack6d {
@@ -79,6 +85,7 @@ impl EventTrack6d {
             retrack,
             prepared: false,
             deferred: Deferred::No,
+            inner: InnerPlan::default(),
         })
     }
 
@@ -125,13 +132,32 @@ impl EventTrack6d {
         reset
     }
 
+    /// Hands `events` to the event state (logged while tracking again may need them).
+    fn integrate(&mut self, events: &[CdEvent]) {
+        let engine = &mut self.engine;
+        if engine.config.modalities.events || engine.refines(false) {
+            match self.retrack.as_mut() {
+                Some(r) if r.is_logging() => engine.surface.integrate_logged(events, &mut r.log),
+                _ => engine.surface.integrate(events),
+            }
+        }
+    }
+
+    /// The step between ticks at `t_us`, then the renders for the step after it.
+    fn step_inner(&mut self, t_us: i64) {
+        self.engine.step_inner(t_us);
+        if self.prepared {
+            self.engine.prefetch_renders(self.inner.next_time());
+        }
+    }
+
     /// Tracks again from a late frame waiting in the engine if it can; then starts the next tick's renders from
     /// the new estimates.
     fn retrack_on_arrival(&mut self) {
         let Some(retrack) = self.retrack.as_mut() else {
             return;
         };
-        if retrack.on_arrival(&mut self.engine) {
+        if retrack.on_arrival(&mut self.engine, &mut self.inner) {
             self.prepared = false;
             self.prepare_next_tick();
         }
@@ -167,13 +193,19 @@ impl PoseTracker for EventTrack6d {
     }
 
     fn push_events(&mut self, events: &[CdEvent]) {
-        let engine = &mut self.engine;
-        if engine.config.modalities.events || engine.refines(false) {
-            match self.retrack.as_mut() {
-                Some(r) if r.is_logging() => engine.surface.integrate_logged(events, &mut r.log),
-                _ => engine.surface.integrate(events),
+        let mut rest = events;
+        // A step between ticks runs once an event after its time shows that every event up to it is in.
+        while let Some(t_us) = self.inner.next_time() {
+            let split = rest.partition_point(|e| e.t_us <= t_us);
+            if split == rest.len() {
+                break;
             }
+            self.integrate(&rest[..split]);
+            rest = &rest[split..];
+            self.inner.advance();
+            self.step_inner(t_us);
         }
+        self.integrate(rest);
     }
 
     fn push_depth(&mut self, t_us: i64, frame: &mut DepthFrame, handling: DepthHandling) {
@@ -200,9 +232,12 @@ impl PoseTracker for EventTrack6d {
         self.prepared = false;
         if let Some(retrack) = self.retrack.as_mut() {
             let defer = std::mem::replace(&mut self.deferred, Deferred::No);
-            self.deferred = retrack.before_tick(&mut self.engine, tick, defer);
+            self.deferred = retrack.before_tick(&mut self.engine, &mut self.inner, tick, defer);
         }
+        // Steps planned after the latest tick that no event after their time reached are not run.
+        self.inner.clear();
         self.engine.step_tick(tick, out, true);
+        self.inner.plan(&self.engine, tick.t_us);
     }
 
     fn take_revision(&mut self) -> Option<i64> {
@@ -220,7 +255,7 @@ impl PoseTracker for EventTrack6d {
         }
         self.prepared = true;
         self.engine.catch_up_background();
-        self.engine.prefetch_renders();
+        self.engine.prefetch_renders(self.inner.next_time());
     }
 
     fn event_surface(&self) -> Option<&EventSurface> {

@@ -11,6 +11,7 @@
 //! exposure, or its events left the log) is left to the next tick, which carries it and counts it.
 
 use super::engine::TickEngine;
+use super::inner::InnerPlan;
 use crate::recon::SurfaceLog;
 use crate::track::object::ObjectState;
 use crate::track::{DepthFallbackCheck, PoseEstimate};
@@ -38,6 +39,7 @@ struct ExposureState {
     objects: Vec<ObjectState>,
     scene: Vec<SceneObject>,
     last_tick_us: Option<i64>,
+    inner_since_tick: bool,
     /// Position of the event log then (the events pushed before the tick).
     events_before: u64,
 }
@@ -144,7 +146,7 @@ impl Retrack {
     /// again with the frame in place (the frame is used up). Returns whether it did: the next tick's renders are
     /// then to be started from the new estimates. Otherwise the frame waits for the next tick
     /// ([`Self::before_tick`]).
-    pub(super) fn on_arrival(&mut self, engine: &mut TickEngine) -> bool {
+    pub(super) fn on_arrival(&mut self, engine: &mut TickEngine, inner: &mut InnerPlan) -> bool {
         let (Some(exposed_us), Some(last_us)) = (engine.depth_t_us, engine.last_tick_us) else {
             return false;
         };
@@ -161,7 +163,7 @@ impl Retrack {
             return false;
         };
         let mut checks = std::mem::take(&mut self.arrival_checks);
-        self.track_again(engine, k, last_us + 1, &mut checks);
+        self.track_again(engine, inner, k, last_us + 1, &mut checks);
         self.arrival_checks = checks;
         true
     }
@@ -179,6 +181,7 @@ impl Retrack {
     pub(super) fn before_tick(
         &mut self,
         engine: &mut TickEngine,
+        inner: &mut InnerPlan,
         tick: &Tick,
         defer: Deferred,
     ) -> Deferred {
@@ -205,7 +208,7 @@ impl Retrack {
                 }
                 Some(k) => {
                     let mut checks = std::mem::take(&mut self.checks);
-                    self.track_again(engine, k, tick.t_us, &mut checks);
+                    self.track_again(engine, inner, k, tick.t_us, &mut checks);
                     self.checks = checks;
                 }
                 None => engine.counters.late_frames_not_retracked += 1,
@@ -233,6 +236,7 @@ impl Retrack {
             objects: engine.objects.iter().map(|o| o.state.clone()).collect(),
             scene: Vec::with_capacity(engine.scene.len()),
             last_tick_us: None,
+            inner_since_tick: false,
             events_before: 0,
         });
         if self.states.is_empty() {
@@ -256,11 +260,14 @@ impl Retrack {
     }
 
     /// Tracks the ticks from the one of state `k` to just before `now_us` again, with the waiting depth frame used
-    /// at the first of them, and leaves the surface at the latest event. The safety net's checks made on the way
-    /// go into `checks`, stamped `now_us`.
+    /// at the first of them, and leaves the surface at the latest event. The steps between ticks are planned
+    /// again from the new estimates and run where their events are in, as they would have been with the frame on
+    /// time; `inner` is left with the steps after the latest tick (those run and those to come). The safety
+    /// net's checks made on the way go into `checks`, stamped `now_us`.
     fn track_again(
         &mut self,
         engine: &mut TickEngine,
+        inner: &mut InnerPlan,
         k: usize,
         now_us: i64,
         checks: &mut Vec<DepthFallbackCheck>,
@@ -280,16 +287,20 @@ impl Retrack {
             }
             engine.scene.clone_from(&state.scene);
             engine.last_tick_us = state.last_tick_us;
+            engine.inner_since_tick = state.inner_since_tick;
         }
         // The frame is treated as on time at its tick; what the replayed ticks count is not counted again.
         let counted = engine.counters;
         engine.depth_t_us = Some(start_us);
         let mut ticks = 0;
         let mut i = self.ticks.partition_point(|(t, _)| t.t_us < start_us);
+        // The steps between ticks before the state's tick ran before it was saved.
+        inner.clear();
         while let Some(&(tick, events_before)) = self.ticks.get(i) {
             if tick.t_us >= now_us {
                 break;
             }
+            self.step_between_ticks(engine, inner, events_before);
             engine.surface.wind_forward(&mut self.log, events_before);
             if tick.t_us > start_us
                 && let Some(state) = self.states.iter_mut().find(|s| s.tick.t_us == tick.t_us)
@@ -299,6 +310,7 @@ impl Retrack {
             }
             self.replayed.clear();
             engine.step_tick(&tick, &mut self.replayed, false);
+            inner.plan(engine, tick.t_us);
             // The safety net's checks of the frame, made now: reported with the tick that made them.
             checks.extend(
                 engine
@@ -314,16 +326,32 @@ impl Retrack {
             ticks += 1;
             i += 1;
         }
+        self.step_between_ticks(engine, inner, self.log.end());
         engine.surface.wind_forward(&mut self.log, u64::MAX);
         self.drop_states_until(start_us);
         engine.depth_t_us = None;
         engine.counters.ticks = counted.ticks;
+        engine.counters.inner_steps = counted.inner_steps;
         engine.counters.depth_frames = counted.depth_frames + 1;
         engine.counters.depth_frames_late = counted.depth_frames_late + 1;
         engine.counters.depth_frames_unused = counted.depth_frames_unused;
         engine.counters.late_frames_retracked += 1;
         engine.counters.ticks_retracked += ticks;
         self.revised_since = Some(self.revised_since.map_or(start_us, |t| t.min(start_us)));
+    }
+
+    /// Runs the steps of `inner` not run yet whose events are in before log position `end`: a step runs once an
+    /// event after its time is (as [`super::EventTrack6d`]'s `push_events` runs it), on the events up to its time.
+    fn step_between_ticks(&mut self, engine: &mut TickEngine, inner: &mut InnerPlan, end: u64) {
+        while let Some(t_us) = inner.next_time() {
+            let after = self.log.position_after(t_us);
+            if after >= end {
+                break;
+            }
+            engine.surface.wind_forward(&mut self.log, after);
+            inner.advance();
+            engine.step_inner(t_us);
+        }
     }
 
     /// The depth safety net's checks made while tracking again before the latest tick, reported as that tick's.
@@ -340,4 +368,5 @@ fn save_state(engine: &TickEngine, tick: &Tick, state: &mut ExposureState) {
     }
     state.scene.clone_from(&engine.scene);
     state.last_tick_us = engine.last_tick_us;
+    state.inner_since_tick = engine.inner_since_tick;
 }

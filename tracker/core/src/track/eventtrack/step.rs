@@ -2,6 +2,7 @@
 //! own thread or splits over its object threads.
 
 use crate::track::config::TrackerConfig;
+use crate::track::estimate::TrackingState;
 use crate::track::object::{ObjectTrack, TickInputs};
 use scene::geometry::PinholeCamera;
 use scene::render::{Renderer, Scene};
@@ -17,6 +18,12 @@ pub(super) struct ObjectStep<'a> {
     pub(super) inputs: TickInputs<'a>,
     pub(super) refines: bool,
     pub(super) depth_now: bool,
+    /// With steps between ticks since the previous tick: each object's step spans the time since its own latest
+    /// estimate (an object a step between ticks left alone spans more).
+    pub(super) own_span: bool,
+    /// At a step between ticks: the image speed, pixels per second, below which an object is left alone (a lost
+    /// one always is).
+    pub(super) inner_min_speed: Option<f64>,
 }
 
 impl ObjectStep<'_> {
@@ -29,6 +36,22 @@ impl ObjectStep<'_> {
             if t_us < o.state.t_us {
                 continue;
             }
+            if let Some(min_speed) = self.inner_min_speed
+                && (o.state.tracking == TrackingState::Lost
+                    || o.state.image_speed(&o.model, self.camera) < min_speed)
+            {
+                continue;
+            }
+            let own_inputs;
+            let inputs = if self.own_span && t_us > o.state.t_us {
+                own_inputs = TickInputs {
+                    dt_s: (t_us - o.state.t_us) as f64 * 1e-6,
+                    ..self.inputs
+                };
+                &own_inputs
+            } else {
+                &self.inputs
+            };
             let roi = if self.refines {
                 o.state
                     .update_roi(&o.model, self.camera, self.config, t_us, self.depth_now)
@@ -40,7 +63,7 @@ impl ObjectStep<'_> {
                 continue;
             }
             // Before the render is taken, so that a render still in flight overlaps it.
-            let depth = o.prepare(&self.inputs, self.config);
+            let depth = o.prepare(inputs, self.config);
             if let Some(roi) = roi
                 && renderer
                     .render_roi(self.scene, self.camera, &roi, &mut o.scratch.target)
@@ -49,7 +72,7 @@ impl ObjectStep<'_> {
                 errors += 1;
                 o.state.roi = None;
             }
-            o.refine(&self.inputs, self.config, depth);
+            o.refine(inputs, self.config, depth);
         }
         errors
     }

@@ -22,7 +22,9 @@ pub(super) fn finish(
     event_support: Option<f64>,
     config: &TrackerConfig,
 ) {
-    assess(state, in_view, fresh_depth, event_support, config);
+    if !inputs.inner {
+        assess(state, in_view, fresh_depth, event_support, config);
+    }
     record_estimate(model, state, inputs, pose, fresh_depth.is_some(), config);
 }
 

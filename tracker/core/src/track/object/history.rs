@@ -3,9 +3,10 @@
 use nalgebra::{Isometry3, UnitQuaternion};
 use scene::geometry::se3;
 
-/// Estimates kept per object: 533 ms at 120 Hz, more than the longest depth age the tracker accepts
+/// Estimates kept per object: 533 ms at 120 Hz with the most steps between ticks
+/// ([`crate::track::config::MAX_INNER_STEPS`]), more than the longest depth age the tracker accepts
 /// ([`crate::track::config::MAX_DEPTH_AGE_LIMIT_MS`]).
-pub const POSE_HISTORY_LEN: usize = 64;
+pub const POSE_HISTORY_LEN: usize = 64 * (1 + crate::track::config::MAX_INNER_STEPS as usize);
 
 /// The latest [`POSE_HISTORY_LEN`] estimates (time in microseconds, `T_cam_obj`), oldest first. A fixed ring: no
 /// allocation. Times strictly increase; an estimate at or before the newest replaces the entries it does not follow.

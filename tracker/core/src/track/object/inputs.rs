@@ -5,11 +5,19 @@ use drivers::recording::DepthFrame;
 use scene::geometry::PinholeCamera;
 
 /// Per-tick inputs shared by every object.
+#[derive(Clone, Copy)]
 pub(crate) struct TickInputs<'a> {
     /// Tick time, microseconds (event camera clock).
     pub t_us: i64,
-    /// Seconds since the previous tick.
+    /// Seconds since the previous tick or step between ticks.
     pub dt_s: f64,
+    /// Whether this is a step between ticks ([`crate::track::InnerStepConfig`]): it moves the estimate and its
+    /// velocity, not its quality or state.
+    pub inner: bool,
+    /// At a tick after steps between ticks: the previous tick's time, microseconds. The velocity is measured
+    /// over the whole tick period, from the estimate then (a step's span is too short to measure it well); steps
+    /// between ticks leave it as it is.
+    pub velocity_since_us: Option<i64>,
     /// The depth frame this tick uses, if any (in the depth camera's pixels).
     pub depth: Option<&'a DepthFrame>,
     /// Exposure of `depth`, microseconds: `t_us`, or earlier for a frame that arrived after its own tick.

@@ -261,15 +261,16 @@ fn assess_tick(
             .carried
             .attach_to_object(&pose, &model.aabb_min, &model.aabb_max, 0.01);
     }
-    let support = if start.use_events && state.image_speed(model, inputs.camera) > 150.0 {
-        measured_support.unwrap_or_else(|| {
-            scratch
-                .edges
-                .contour_support(&scratch.view, &pose, inputs.camera)
-        })
-    } else {
-        None
-    };
+    let support =
+        if !inputs.inner && start.use_events && state.image_speed(model, inputs.camera) > 150.0 {
+            measured_support.unwrap_or_else(|| {
+                scratch
+                    .edges
+                    .contour_support(&scratch.view, &pose, inputs.camera)
+            })
+        } else {
+            None
+        };
     // A late frame's evidence is the weaker of its agreement at the exposure, with the pose checked there, and
     // at the tick, where its object part agrees with the events' motion by construction but its background and
     // hand stay where they were measured.

@@ -65,7 +65,17 @@ pub(super) fn record_estimate(
             (inputs.t_us - t0) as f64 * 1e-6,
             config.motion.velocity_smoothing_depth,
         ),
-        _ => (state.pose, inputs.dt_s, config.motion.velocity_smoothing),
+        _ => match inputs
+            .velocity_since_us
+            .and_then(|t0| Some((t0, state.history.at(t0)?)))
+        {
+            Some((t0, p0)) if inputs.t_us > t0 => (
+                p0,
+                (inputs.t_us - t0) as f64 * 1e-6,
+                config.motion.velocity_smoothing,
+            ),
+            _ => (state.pose, inputs.dt_s, config.motion.velocity_smoothing),
+        },
     };
     if fresh_depth {
         state.anchor_before = state.anchor;
@@ -76,7 +86,9 @@ pub(super) fn record_estimate(
             None => (inputs.t_us, pose),
         });
     }
-    if span > 0.0 && state.tracking != TrackingState::Lost {
+    if inputs.inner {
+        // Steps between ticks measure no velocity (see `TickInputs::velocity_since_us`).
+    } else if span > 0.0 && state.tracking != TrackingState::Lost {
         let measured = model.observable_motion(&reference, &pose, span);
         let a = a.clamp(0.0, 1.0);
         let mut v = a * measured + (1.0 - a) * state.velocity;

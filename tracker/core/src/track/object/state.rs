@@ -277,9 +277,19 @@ impl ObjectState {
 
     /// Image speed of the object's outline predicted from the velocity, full-image pixels per second.
     pub fn image_speed(&self, model: &ObjectModel, camera: &PinholeCamera) -> f64 {
+        self.image_speed_at(model, camera, &self.velocity)
+    }
+
+    /// Image speed of the object's outline at the prediction if it moved at `v` (centre m/s, angular rad/s),
+    /// full-image pixels per second.
+    pub fn image_speed_at(
+        &self,
+        model: &ObjectModel,
+        camera: &PinholeCamera,
+        v: &Vector6<f64>,
+    ) -> f64 {
         let c = model.center_at(&self.predicted);
         let z = c.z.max(0.05);
-        let v = self.velocity;
         let lateral = (v[0] * v[0] + v[1] * v[1]).sqrt() + (v[2].abs() * model.diameter * 0.5 / z);
         let angular = Vector3::new(v[3], v[4], v[5]).norm() * model.diameter * 0.5;
         camera.fx * (lateral + angular) / z
