@@ -33,6 +33,15 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
+    #[test]
+    fn the_shipped_fast_motion_parameters_turn_steps_between_ticks_on() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/fast-motion.toml");
+        let config = tracker_params(Some(&path)).unwrap();
+        assert_eq!(TrackerConfig::default().inner_steps.inner_step_px, 0.0);
+        assert_eq!(config.inner_steps.inner_step_px, 6.0);
+        assert_eq!(config.inner_steps.max_inner_steps, 3);
+    }
+
     proptest! {
         /// Any `--depth-latency-ms` text gives a latency of 0..=1000 ms or an error quoting it; written ones read back.
         #[test]
