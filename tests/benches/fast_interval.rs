@@ -1,0 +1,136 @@
+//! The CPU one 120 Hz tick period costs the tracker on a fast object (a 0.8 s fast mug shake, about 2 m/s, 160x160
+//! ROI): the events of the period handed over (with the steps between ticks they set off),
+//! the depth frame at a depth-exposure tick, the tick and `prepare_next_tick`, as the runtime runs them. Each sample
+//! is the CPU time of every thread of the process (the tracker's and the `render-ahead` thread) over consecutive
+//! periods of the recording, replayed from its first pose again when it ends (the new tracker is not timed).
+//! `ticks_only`: the default; `fast_motion`: steps between ticks as `config/fast-motion.toml` sets them.
+
+// `criterion_group!` defines undocumented public functions.
+#![allow(missing_docs)]
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use drivers::event::{CdEvent, EventBuffer};
+use drivers::recording::{DepthFrame, Recording};
+use drivers::timeline::Tick;
+use eventtrack6d_tests::tick_fixture::{fast_mug_recording, mug_tracker};
+use scene::render::CpuRenderer;
+use std::time::Duration;
+use tracker::recording::recording_ticks;
+use tracker::track::{DepthHandling, EventTrack6d, PoseTracker, TrackerConfig};
+
+/// One tick period of the recording: its events, its tick and the depth frame exposed at it.
+struct Period {
+    events: Vec<CdEvent>,
+    tick: Tick,
+    depth: Option<DepthFrame>,
+}
+
+/// Every tick period of `rec` from its first tick on.
+fn periods(rec: &Recording) -> Vec<Period> {
+    let mut all = EventBuffer::new();
+    rec.events()
+        .expect("events")
+        .read_all(&mut all)
+        .expect("decoding the events");
+    let ticks = recording_ticks(rec).expect("ticks");
+    let mut rest = &all.cd[..];
+    ticks
+        .iter()
+        .map(|tick| {
+            let split = rest.partition_point(|e| e.t_us <= tick.t_us);
+            let events = rest[..split].to_vec();
+            rest = &rest[split..];
+            let depth = tick
+                .depth_frame
+                .map(|n| rec.depth_frame(n).expect("depth frame"));
+            Period {
+                events,
+                tick: *tick,
+                depth,
+            }
+        })
+        .collect()
+}
+
+/// CPU time of the whole process (every thread, user and system), nanoseconds.
+fn process_cpu_ns() -> u64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec; CLOCK_PROCESS_CPUTIME_ID is supported on Linux.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    assert_eq!(rc, 0, "clock_gettime(CLOCK_PROCESS_CPUTIME_ID) failed");
+    u64::try_from(ts.tv_sec).unwrap_or(0) * 1_000_000_000 + u64::try_from(ts.tv_nsec).unwrap_or(0)
+}
+
+/// Replays `periods` of `rec` into trackers with `config`, timing each period's CPU.
+fn bench_periods(
+    c: &mut Criterion,
+    label: &str,
+    rec: &Recording,
+    periods: &mut [Period],
+    config: &TrackerConfig,
+) {
+    let fresh =
+        || -> EventTrack6d { mug_tracker(rec, config.clone(), Box::new(CpuRenderer::new()), 1).0 };
+    let mut tracker = fresh();
+    let mut next = 0;
+    let mut told = false;
+    let mut out = Vec::with_capacity(4);
+    let mut spare = periods[0].depth.clone();
+    c.bench_function(&format!("cpu_of_fast_period_{label}_160"), |b| {
+        b.iter_custom(|iters| {
+            let mut total = 0;
+            for _ in 0..iters {
+                if next == periods.len() {
+                    if !told {
+                        let counters = tracker.counters();
+                        eprintln!(
+                            "{label}: {} steps between {} ticks",
+                            counters.inner_steps, counters.ticks
+                        );
+                        told = true;
+                    }
+                    tracker = fresh();
+                    next = 0;
+                }
+                let p = &mut periods[next];
+                let start = process_cpu_ns();
+                tracker.push_events(&p.events);
+                if let (Some(frame), Some(spare)) = (p.depth.as_ref(), spare.as_mut()) {
+                    spare.clone_from(frame);
+                    tracker.push_depth(p.tick.t_us, spare, DepthHandling::Now);
+                }
+                out.clear();
+                tracker.tick(&p.tick, &mut out);
+                tracker.prepare_next_tick();
+                total += process_cpu_ns().saturating_sub(start);
+                next += 1;
+            }
+            Duration::from_nanos(total)
+        })
+    });
+}
+
+fn fast_periods(c: &mut Criterion) {
+    let dir = std::env::temp_dir().join("eventtrack6d-fast-period-bench");
+    let rec = fast_mug_recording(&dir, 0.8);
+    let mut periods = periods(&rec);
+    bench_periods(
+        c,
+        "ticks_only",
+        &rec,
+        &mut periods,
+        &TrackerConfig::default(),
+    );
+    // `config/fast-motion.toml`.
+    let mut fast = TrackerConfig::default();
+    fast.inner_steps.inner_step_px = 6.0;
+    fast.inner_steps.max_inner_steps = 3;
+    bench_periods(c, "fast_motion", &rec, &mut periods, &fast);
+}
+
+criterion_group!(benches, fast_periods);
+criterion_main!(benches);
