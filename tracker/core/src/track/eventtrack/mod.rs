@@ -147,7 +147,7 @@ impl EventTrack6d {
     fn step_inner(&mut self, t_us: i64) {
         self.engine.step_inner(t_us);
         if self.prepared {
-            self.engine.prefetch_renders(self.inner.next_time());
+            prefetch::prefetch_renders(&mut self.engine, self.inner.next_time());
         }
     }
 
@@ -255,7 +255,7 @@ impl PoseTracker for EventTrack6d {
         }
         self.prepared = true;
         self.engine.catch_up_background();
-        self.engine.prefetch_renders(self.inner.next_time());
+        prefetch::prefetch_renders(&mut self.engine, self.inner.next_time());
     }
 
     fn event_surface(&self) -> Option<&EventSurface> {

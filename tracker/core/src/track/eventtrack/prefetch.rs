@@ -6,58 +6,56 @@ use super::engine::TickEngine;
 use super::step::own_share;
 use scene::render::Scene;
 
-impl TickEngine {
-    /// Starts each object's render for the next step: the step between ticks planned at `inner_us`, else the next
-    /// tick at the times it may come ([`super::next_tick::NextTick::candidates`]); not when the tracker refines
-    /// only at depth frames ([`crate::track::ExecutionConfig::prefetch_renders`]).
-    pub fn prefetch_renders(&mut self, inner_us: Option<i64>) {
-        if !(self.config.execution.prefetch_renders && self.refines(false)) {
-            return;
-        }
-        // What the last step did not take, the next one will not either.
-        self.renderers.forget_prefetched();
-        if let Some(t) = inner_us {
-            self.prefetch_next(t);
-            return;
-        }
-        let (times, count) = self.next_tick.candidates();
-        for &t in &times[..count] {
-            self.prefetch_next(t);
-        }
+/// Starts each object's render for the next step: the step between ticks planned at `inner_us`, else the next
+/// tick at the times it may come ([`super::next_tick::NextTick::candidates`]); not when the tracker refines
+/// only at depth frames ([`crate::track::ExecutionConfig::prefetch_renders`]).
+pub(super) fn prefetch_renders(engine: &mut TickEngine, inner_us: Option<i64>) {
+    if !(engine.config.execution.prefetch_renders && engine.refines(false)) {
+        return;
     }
+    // What the last step did not take, the next one will not either.
+    engine.renderers.forget_prefetched();
+    if let Some(t) = inner_us {
+        prefetch_next(engine, t);
+        return;
+    }
+    let (times, count) = engine.next_tick.candidates();
+    for &t in &times[..count] {
+        prefetch_next(engine, t);
+    }
+}
 
-    /// Starts each object's render for the tick expected at `next_t_us`, at the pose that tick will predict, in the
-    /// ROI it will choose without a depth frame. A failed prefetch is not reported here: the next tick renders
-    /// again and counts the error then.
-    fn prefetch_next(&mut self, next_t_us: i64) {
-        for (s, o) in self.scene.iter_mut().zip(&self.objects) {
-            let step = (next_t_us - o.state.t_us) as f64 * 1e-6;
-            s.pose = o.state.prediction(&o.model, step.max(0.0), &self.config);
-        }
-        let scene = Scene::objects(&self.scene)
-            .geometry_only()
-            .normals_on_surface_grid(self.config.correspond.max_surface_points);
-        let camera = &self.rig.event_camera;
-        // Each object's render is made ahead by the renderer that will step it ([`ObjectStep::run_split`]).
-        let share = own_share(self.objects.len(), self.renderers.workers.len());
-        let renderers =
-            std::iter::once(&mut self.renderers.main).chain(&mut self.renderers.workers);
-        for ((objects, poses), renderer) in self
-            .objects
-            .chunks(share.max(1))
-            .zip(self.scene.chunks(share.max(1)))
-            .zip(renderers)
-        {
-            for (o, s) in objects.iter().zip(poses) {
-                if next_t_us < o.state.t_us {
-                    continue;
-                }
-                if let Some(roi) =
-                    o.state
-                        .roi_at(&o.model, &s.pose, camera, &self.config, next_t_us, false)
-                {
-                    let _ = renderer.prefetch_roi(&scene, camera, &roi);
-                }
+/// Starts each object's render for the tick expected at `next_t_us`, at the pose that tick will predict, in the
+/// ROI it will choose without a depth frame. A failed prefetch is not reported here: the next tick renders
+/// again and counts the error then.
+fn prefetch_next(engine: &mut TickEngine, next_t_us: i64) {
+    for (s, o) in engine.scene.iter_mut().zip(&engine.objects) {
+        let step = (next_t_us - o.state.t_us) as f64 * 1e-6;
+        s.pose = o.state.prediction(&o.model, step.max(0.0), &engine.config);
+    }
+    let scene = Scene::objects(&engine.scene)
+        .geometry_only()
+        .normals_on_surface_grid(engine.config.correspond.max_surface_points);
+    let camera = &engine.rig.event_camera;
+    // Each object's render is made ahead by the renderer that will step it ([`ObjectStep::run_split`]).
+    let share = own_share(engine.objects.len(), engine.renderers.workers.len());
+    let renderers =
+        std::iter::once(&mut engine.renderers.main).chain(&mut engine.renderers.workers);
+    for ((objects, poses), renderer) in engine
+        .objects
+        .chunks(share.max(1))
+        .zip(engine.scene.chunks(share.max(1)))
+        .zip(renderers)
+    {
+        for (o, s) in objects.iter().zip(poses) {
+            if next_t_us < o.state.t_us {
+                continue;
+            }
+            if let Some(roi) =
+                o.state
+                    .roi_at(&o.model, &s.pose, camera, &engine.config, next_t_us, false)
+            {
+                let _ = renderer.prefetch_roi(&scene, camera, &roi);
             }
         }
     }
