@@ -3,7 +3,8 @@
 //! the depth frame at a depth-exposure tick, the tick and `prepare_next_tick`, as the runtime runs them. Each sample
 //! is the CPU time of every thread of the process (the tracker's and the `render-ahead` thread) over consecutive
 //! periods of the recording, replayed from its first pose again when it ends (the new tracker is not timed).
-//! `ticks_only`: the default; `fast_motion`: steps between ticks as `config/fast-motion.toml` sets them.
+//! `ticks_only`: the default; `fast_motion`: steps between ticks as `config/tracker/fast-motion.toml` sets
+//! them.
 
 // `criterion_group!` defines undocumented public functions.
 #![allow(missing_docs)]
@@ -125,7 +126,7 @@ fn fast_periods(c: &mut Criterion) {
         &mut periods,
         &TrackerConfig::default(),
     );
-    // `config/fast-motion.toml`.
+    // `config/tracker/fast-motion.toml`.
     let mut fast = TrackerConfig::default();
     fast.inner_steps.inner_step_px = 6.0;
     fast.inner_steps.max_inner_steps = 3;

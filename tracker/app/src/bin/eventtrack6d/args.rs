@@ -35,7 +35,8 @@ mod tests {
 
     #[test]
     fn the_shipped_fast_motion_parameters_turn_steps_between_ticks_on() {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/fast-motion.toml");
+        let path =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/tracker/fast-motion.toml");
         let config = tracker_params(Some(&path)).unwrap();
         assert_eq!(TrackerConfig::default().inner_steps.inner_step_px, 0.0);
         assert_eq!(config.inner_steps.inner_step_px, 6.0);

@@ -56,14 +56,14 @@ grouped_parameters! {
         }
         /// Steps between ticks: a fast object is refined again as its events arrive, at evenly spaced times between
         /// two ticks, so that each refinement starts from an estimate at most one step old. Only the ticks publish;
-        /// a step between ticks moves the estimate, its velocity and its history ([`crate::track::PoseTracker::pose_at`]),
-        /// not its quality or state.
+        /// a step between ticks moves the estimate and its history ([`crate::track::PoseTracker::pose_at`]), not
+        /// its velocity, quality or state.
         inner_steps: InnerStepConfig {
             /// An object gets one step between ticks for every this many pixels its outline moves per tick at its
             /// estimated speed (beyond the first): at 25 px per tick and 6 px, three steps. 0 (the default) turns
             /// steps between ticks off: 6 lifted the `fast` suite from 35.1 to 48.9 ADD-S but lowered the slow and
-            /// moderate sequences of `dev` and `holdout` by about 2 (docs/history/tuning.md); `config/fast-motion.toml`
-            /// turns them on.
+            /// moderate sequences of `dev` and `holdout` by about 2 (docs/history/tuning.md);
+            /// `config/tracker/fast-motion.toml` turns them on.
             inner_step_px: f64 = 0.0,
             /// Most steps between two ticks (the CPU a tick may cost: each step costs about what a tick does).
             max_inner_steps: u32 = 3,
