@@ -182,7 +182,10 @@ proptest! {
             rest = &rest[c..];
         }
         dec.decode(rest, &mut out);
-        dec.resynchronise();
+        // Only a real gap calls for resynchronising, which skips to the next TIME_HIGH and row.
+        if end > at {
+            dec.resynchronise();
+        }
         dec.decode(&bytes[end..], &mut out);
         dec.finish();
         prop_assert!(is_subsequence(&out.cd, &cd), "decoded events that were never sent");
