@@ -265,8 +265,8 @@ enabled = false
         offline_counters.depth_frames
     );
     assert!(summary.to_string().contains(&format!(
-        "tracker:         {} re-detections",
-        offline_counters.redetections
+        "tracker:         {} steps between ticks, {} re-detections",
+        offline_counters.inner_steps, offline_counters.redetections
     )));
     assert_eq!(
         summary.source_stats.depth_frames, stats.depth_frames,
