@@ -14,6 +14,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use drivers::event::{CdEvent, EventBuffer};
 use drivers::recording::{DepthFrame, Recording};
 use drivers::timeline::Tick;
+use eventtrack6d_tests::cpu_time::process_cpu_ns;
 use eventtrack6d_tests::tick_fixture::{fast_mug_recording, mug_tracker};
 use scene::render::CpuRenderer;
 use std::time::Duration;
@@ -52,18 +53,6 @@ fn periods(rec: &Recording) -> Vec<Period> {
             }
         })
         .collect()
-}
-
-/// CPU time of the whole process (every thread, user and system), nanoseconds.
-fn process_cpu_ns() -> u64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `ts` is a valid, writable timespec; CLOCK_PROCESS_CPUTIME_ID is supported on Linux.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
-    assert_eq!(rc, 0, "clock_gettime(CLOCK_PROCESS_CPUTIME_ID) failed");
-    u64::try_from(ts.tv_sec).unwrap_or(0) * 1_000_000_000 + u64::try_from(ts.tv_nsec).unwrap_or(0)
 }
 
 /// Replays `periods` of `rec` into trackers with `config`, timing each period's CPU.

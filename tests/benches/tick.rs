@@ -11,6 +11,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use eventtrack6d_tests::cpu_time::process_cpu_ns;
 use eventtrack6d_tests::render_hook::HookedRenderer;
 use eventtrack6d_tests::tick_fixture::{SteadyTracker, mug_recording, steady_tracker};
 use scene::render::{CpuRenderer, RenderAhead, Renderer, RendererKind, create_renderer};
@@ -124,18 +125,6 @@ fn bench_paced(
         });
     }
     group.finish();
-}
-
-/// CPU time of the whole process (every thread, user and system), nanoseconds.
-fn process_cpu_ns() -> u64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `ts` is a valid, writable timespec; CLOCK_PROCESS_CPUTIME_ID is supported on Linux.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
-    assert_eq!(rc, 0, "clock_gettime(CLOCK_PROCESS_CPUTIME_ID) failed");
-    u64::try_from(ts.tv_sec).unwrap_or(0) * 1_000_000_000 + u64::try_from(ts.tv_nsec).unwrap_or(0)
 }
 
 /// The CPU time the same back-to-back ticks as [`bench_tracker`] cost, summed over every thread of the process

@@ -1,6 +1,8 @@
 //! Shared helpers for the workspace-level end-to-end tests.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+/// The CPU time of the whole process, for the benchmarks that count every thread.
+pub mod cpu_time;
 pub mod dbc;
 /// A renderer that runs a hook before every render (counting renders, noting threads).
 pub mod render_hook;
