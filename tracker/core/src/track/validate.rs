@@ -180,7 +180,7 @@ fn optimiser_checks(config: &TrackerConfig) -> [Check; 6] {
 }
 
 /// The checks of the motion model, in the order they are reported.
-fn motion_checks(config: &TrackerConfig) -> [Check; 7] {
+fn motion_checks(config: &TrackerConfig) -> [Check; 8] {
     [
         Check::new(
             "inner_step_px",
@@ -194,6 +194,11 @@ fn motion_checks(config: &TrackerConfig) -> [Check; 7] {
                 crate::track::config::MAX_INNER_STEPS as f64,
                 "must be at most 7",
             ),
+        ),
+        Check::new(
+            "line_of_sight_sigma_m",
+            config.inner_steps.line_of_sight_sigma_m,
+            Rule::Positive(POSITIVE),
         ),
         Check::new(
             "prediction_gain",

@@ -61,12 +61,16 @@ grouped_parameters! {
         inner_steps: InnerStepConfig {
             /// An object gets one step between ticks for every this many pixels its outline moves per tick at its
             /// estimated speed (beyond the first): at 25 px per tick and 6 px, three steps. 0 (the default) turns
-            /// steps between ticks off: 6 lifted the `fast` suite from 35.1 to 48.9 ADD-S but lowered the slow and
-            /// moderate sequences of `dev` and `holdout` by about 2 (docs/history/tuning.md);
+            /// steps between ticks off: 6 lifted the `fast` suite from 35.1 to 48.7 ADD-S but lowered the slow and
+            /// moderate sequences of `dev` by 2.0 (`holdout`'s rose by 1.1; docs/history/tuning.md);
             /// `config/tracker/fast-motion.toml` turns them on.
             inner_step_px: f64 = 0.0,
             /// Most steps between two ticks (the CPU a tick may cost: each step costs about what a tick does).
             max_inner_steps: u32 = 3,
+            /// Standard deviation of a step's motion along the line of sight to the object beyond its prediction,
+            /// metres per tick period (spread over the steps like the optimiser's prior): events barely observe
+            /// depth, so each step would drift there; the ticks refine it.
+            line_of_sight_sigma_m: f64 = 0.001,
         }
         /// The correspond phase: the event window, how many samples are matched, and which outline samples count.
         correspond: CorrespondConfig {

@@ -355,6 +355,7 @@ impl TickEngine {
             t_us,
             dt_s,
             inner: inner_min_speed.is_some(),
+            span: 1.0,
             velocity_since_us,
             depth: depth_now.then_some(&self.depth),
             depth_exposed_us: exposed_us.unwrap_or(t_us),
@@ -373,7 +374,7 @@ impl TickEngine {
             inputs,
             refines,
             depth_now,
-            own_span: self.inner_since_tick,
+            own_span: self.inner_since_tick.then(|| self.rig.clock.period_s()),
             inner_min_speed,
         };
         self.counters.render_errors += step.run_split(&mut self.objects, &mut self.renderers);

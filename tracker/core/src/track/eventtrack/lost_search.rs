@@ -316,6 +316,7 @@ impl Redetection {
             camera: &frame.rig.event_camera,
             config,
             inputs: TickInputs {
+                span: 1.0,
                 t_us: frame_t_us,
                 dt_s,
                 inner: false,

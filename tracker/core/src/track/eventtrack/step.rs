@@ -18,9 +18,9 @@ pub(super) struct ObjectStep<'a> {
     pub(super) inputs: TickInputs<'a>,
     pub(super) refines: bool,
     pub(super) depth_now: bool,
-    /// With steps between ticks since the previous tick: each object's step spans the time since its own latest
-    /// estimate (an object a step between ticks left alone spans more).
-    pub(super) own_span: bool,
+    /// With steps between ticks since the previous tick, the tick period, seconds: each object's step spans the
+    /// time since its own latest estimate (an object a step between ticks left alone spans more).
+    pub(super) own_span: Option<f64>,
     /// At a step between ticks: the image speed, pixels per second, below which an object is left alone (a lost
     /// one always is).
     pub(super) inner_min_speed: Option<f64>,
@@ -43,9 +43,13 @@ impl ObjectStep<'_> {
                 continue;
             }
             let own_inputs;
-            let inputs = if self.own_span && t_us > o.state.t_us {
+            let inputs = if let Some(period_s) = self.own_span
+                && t_us > o.state.t_us
+            {
+                let dt_s = (t_us - o.state.t_us) as f64 * 1e-6;
                 own_inputs = TickInputs {
-                    dt_s: (t_us - o.state.t_us) as f64 * 1e-6,
+                    dt_s,
+                    span: (dt_s / period_s).min(1.0),
                     ..self.inputs
                 };
                 &own_inputs

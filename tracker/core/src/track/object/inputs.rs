@@ -14,6 +14,10 @@ pub(crate) struct TickInputs<'a> {
     /// Whether this is a step between ticks ([`crate::track::InnerStepConfig`]): it moves the estimate and its
     /// velocity, not its quality or state.
     pub inner: bool,
+    /// The fraction of a tick period this object's step spans: 1 at a tick without steps between ticks, less at
+    /// a step between ticks and at the tick after them (each spans only the time since its object's latest
+    /// estimate).
+    pub span: f64,
     /// At a tick after steps between ticks: the previous tick's time, microseconds. The velocity is measured
     /// over the whole tick period, from the estimate then (a step's span is too short to measure it well); steps
     /// between ticks leave it as it is.

@@ -78,11 +78,37 @@ pub(super) fn optimise(
         t_us: inputs.t_us,
         roi_bin_px: roi.width / f64::from(roi.out_width.max(1)),
     };
-    let pose = optimiser(model, config, Some((1e-5, 1e-4))).run(
+    let mut optimiser = optimiser(model, config, Some((1e-5, 1e-4)));
+    optimiser.prior = step_prior(optimiser.prior, model, inputs, config, &start.pose);
+    let pose = optimiser.run(
         &mut [&mut depth, &mut events, &mut intensity],
         &scratch.view,
         &model.center_obj,
         start.pose,
     );
     (pose, depth.stats)
+}
+
+/// The prior of this object's step: at a step between ticks, held along the line of sight to the object at
+/// `start` (`line_of_sight_sigma_m`: the events barely observe depth, so each step would add its own drift there;
+/// the ticks refine it); then spread over the part of the tick period the step spans ([`StartPrior::spread`]:
+/// steps between ticks and the tick after them span less).
+fn step_prior(
+    prior: StartPrior,
+    model: &ObjectModel,
+    inputs: &TickInputs<'_>,
+    config: &TrackerConfig,
+    start: &Isometry3<f64>,
+) -> StartPrior {
+    let prior = if inputs.inner {
+        let center = start * nalgebra::Point3::from(model.center_obj);
+        prior.with_along(&center.coords, config.inner_steps.line_of_sight_sigma_m)
+    } else {
+        prior
+    };
+    if inputs.span < 1.0 {
+        prior.spread(inputs.span)
+    } else {
+        prior
+    }
 }
