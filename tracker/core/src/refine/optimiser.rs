@@ -42,11 +42,14 @@ impl StartPrior {
     }
 
     /// This prior with a standard deviation of `sigma_m` metres on the translation along `direction` (camera
-    /// frame) on top of the isotropic one.
+    /// frame) on top of the isotropic one; unchanged for a zero or non-finite direction.
     pub fn with_along(self, direction: &Vector3<f64>, sigma_m: f64) -> Self {
-        Self {
-            along: (1.0 / (sigma_m * sigma_m), direction.normalize()),
-            ..self
+        match direction.try_normalize(1e-12) {
+            Some(l) if l.iter().all(|v| v.is_finite()) => Self {
+                along: (1.0 / (sigma_m * sigma_m), l),
+                ..self
+            },
+            _ => self,
         }
     }
 
@@ -154,6 +157,16 @@ mod tests {
         assert!((spread.along.0 / prior.along.0 - 4.0).abs() < 1e-12);
         assert_eq!(prior.spread(1.0), prior);
         assert_eq!(prior.spread(0.0), prior.spread(0.05));
+    }
+
+    #[test]
+    fn no_line_of_sight_prior_without_a_direction() {
+        let base = StartPrior::from_sigmas(0.01, 0.05);
+        assert_eq!(base.with_along(&Vector3::zeros(), 0.001), base);
+        assert_eq!(
+            base.with_along(&Vector3::new(f64::NAN, 0.0, 1.0), 0.001),
+            base
+        );
     }
 
     #[test]
