@@ -52,6 +52,11 @@ impl PoseHistory {
         self.len == 0
     }
 
+    /// Time of the oldest estimate kept, microseconds; `None` when empty.
+    pub fn first_us(&self) -> Option<i64> {
+        (self.len > 0).then(|| self.get(0).0)
+    }
+
     fn get(&self, i: usize) -> (i64, Isometry3<f64>) {
         self.entries[(self.start + i) % POSE_HISTORY_LEN]
     }
