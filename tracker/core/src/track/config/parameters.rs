@@ -61,8 +61,8 @@ grouped_parameters! {
         inner_steps: InnerStepConfig {
             /// An object gets one step between ticks for every this many pixels its outline moves per tick at its
             /// estimated speed (beyond the first): at 25 px per tick and 6 px, three steps. 0 (the default) turns
-            /// steps between ticks off: 6 lifted the `fast` suite from 35.1 to 48.7 ADD-S but lowered the slow and
-            /// moderate sequences of `dev` by 2.0 (`holdout`'s rose by 1.1; docs/history/tuning.md);
+            /// steps between ticks off: 6 lifts the `fast` suite from 35.1 to 45-49 ADD-S but lowers the slow and
+            /// moderate sequences of `dev` and `holdout` by about 1.5 (BENCHMARKS.md, "The fast suite");
             /// `config/tracker/fast-motion.toml` turns them on.
             inner_step_px: f64 = 0.0,
             /// Most steps between two ticks (the CPU a tick may cost: each step costs about what a tick does).
