@@ -119,6 +119,7 @@ fn fast_periods(c: &mut Criterion) {
     let mut fast = TrackerConfig::default();
     fast.inner_steps.inner_step_px = 6.0;
     fast.inner_steps.max_inner_steps = 3;
+    fast.motion.velocity_start_corrected = true;
     bench_periods(c, "fast_motion", &rec, &mut periods, &fast);
 }
 

@@ -41,6 +41,8 @@ mod tests {
         assert_eq!(TrackerConfig::default().inner_steps.inner_step_px, 0.0);
         assert_eq!(config.inner_steps.inner_step_px, 6.0);
         assert_eq!(config.inner_steps.max_inner_steps, 3);
+        assert!(!TrackerConfig::default().motion.velocity_start_corrected);
+        assert!(config.motion.velocity_start_corrected);
     }
 
     proptest! {

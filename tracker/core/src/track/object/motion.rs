@@ -90,12 +90,19 @@ pub(super) fn record_estimate(
         // Steps between ticks measure no velocity (see `TickInputs::velocity_since_us`).
     } else if span > 0.0 && state.tracking != TrackingState::Lost {
         let measured = model.observable_motion(&reference, &pose, span);
-        let a = a.clamp(0.0, 1.0);
-        let mut v = a * measured + (1.0 - a) * state.velocity;
+        let weight_so_far = if config.motion.velocity_start_corrected {
+            state.velocity_weight
+        } else {
+            1.0
+        };
+        let (mut v, weight) =
+            smooth_velocity(&state.velocity, weight_so_far, &measured, a.clamp(0.0, 1.0));
         cap_motion(&mut v, config);
         state.velocity = v;
+        state.velocity_weight = weight;
     } else if state.tracking == TrackingState::Lost {
         state.velocity = Vector6::zeros();
+        state.velocity_weight = 0.0;
     }
     if fresh_depth && let Some((exposed_us, _)) = state.late_motion {
         // What the late frame changed at this tick, it changes since its exposure.
@@ -107,6 +114,28 @@ pub(super) fn record_estimate(
     state.pose = normalise(pose);
     state.t_us = inputs.t_us;
     state.history.push(state.t_us, state.pose);
+}
+
+/// The smoothed velocity after `measured` (centre m/s, angular rad/s) with smoothing weight `a` in `[0, 1]`,
+/// and its new [`ObjectState::velocity_weight`], from `velocity` whose measured share is `weight`. An exponential
+/// average corrected for its start: the zero a velocity starts from (a new or re-detected object) is no
+/// measurement, so each measurement counts by its weight relative to all weight measured so far; the first one
+/// after a reset sets the velocity outright, and once the weight reaches 1 this is the plain average with `a`.
+fn smooth_velocity(
+    velocity: &Vector6<f64>,
+    weight: f64,
+    measured: &Vector6<f64>,
+    a: f64,
+) -> (Vector6<f64>, f64) {
+    if weight >= 1.0 {
+        return (a * measured + (1.0 - a) * velocity, 1.0);
+    }
+    let total = a + (1.0 - a) * weight;
+    if total <= 0.0 {
+        return (*velocity, weight);
+    }
+    let share = a / total;
+    (share * measured + (1.0 - share) * velocity, total)
 }
 
 /// Unit image direction (full-image pixels) the centre at `predicted` moves in at the estimated velocity,
@@ -212,5 +241,31 @@ mod tests {
         // A re-detection forgets both anchors.
         track.relocate(at(0.1, 0.0));
         assert!(anchored_extrapolation(&model, &track, 66_666, &config).is_none());
+    }
+
+    #[test]
+    fn a_started_velocity_is_the_mean_of_its_measurements_not_pulled_to_zero() {
+        let m = Vector6::new(2.0, 0.0, -1.0, 0.0, 5.0, 0.0);
+        let (mut v, mut w) = (Vector6::zeros(), 0.0);
+        // The first measurement after a reset sets the velocity; equal ones keep it (a plain average from zero
+        // would give 0.2, 0.36, 0.49 of it).
+        for _ in 0..4 {
+            (v, w) = smooth_velocity(&v, w, &m, 0.2);
+            assert!((v - m).norm() < 1e-12, "{v}");
+        }
+        assert!((w - (1.0 - 0.8f64.powi(4))).abs() < 1e-12, "{w}");
+        // Once the weight is whole, a new measurement counts by `a` alone.
+        let (v, w) = smooth_velocity(&m, 1.0, &Vector6::zeros(), 0.2);
+        assert!(
+            (v - 0.8 * m).norm() < 1e-12 && (w - 1.0).abs() < 1e-12,
+            "{v} {w}"
+        );
+        // Two measurements from a reset count 1 : (0.8 x 0.2) / 0.36 apart: the later one weighs more.
+        let (v1, w1) = smooth_velocity(&Vector6::zeros(), 0.0, &m, 0.2);
+        let (v2, _) = smooth_velocity(&v1, w1, &Vector6::zeros(), 0.2);
+        assert!((v2 - m * (0.16 / 0.36)).norm() < 1e-12, "{v2}");
+        // A weight of 0 and no smoothing leaves the velocity as it is.
+        let (v, w) = smooth_velocity(&m, 0.0, &Vector6::zeros(), 0.0);
+        assert!(v == m && w == 0.0);
     }
 }

@@ -29,6 +29,9 @@ pub(crate) struct ObjectState {
     pub previous: Option<(i64, Isometry3<f64>)>,
     /// Smoothed velocity of the centre (m/s) and angular velocity (rad/s), camera frame.
     pub velocity: Vector6<f64>,
+    /// How much of [`Self::velocity`] is measured rather than the zero it started from, in `[0, 1]`: the sum of
+    /// the smoothing weights of the measurements since the velocity was last reset.
+    pub velocity_weight: f64,
     /// The pose predicted for the current tick.
     pub predicted: Isometry3<f64>,
     /// The estimate at the latest fresh depth frame's exposure (time, pose).
@@ -94,6 +97,7 @@ impl Clone for ObjectState {
             t_us,
             previous,
             velocity,
+            velocity_weight,
             predicted,
             anchor,
             anchor_before,
@@ -121,6 +125,7 @@ impl Clone for ObjectState {
         self.t_us = *t_us;
         self.previous = *previous;
         self.velocity = *velocity;
+        self.velocity_weight = *velocity_weight;
         self.predicted = *predicted;
         self.anchor = *anchor;
         self.anchor_before = *anchor_before;
@@ -154,6 +159,7 @@ impl ObjectState {
             t_us,
             previous: None,
             velocity: Vector6::zeros(),
+            velocity_weight: 0.0,
             predicted: pose,
             anchor: None,
             anchor_before: None,
@@ -186,6 +192,7 @@ impl ObjectState {
         self.t_us = other.t_us;
         self.previous = other.previous;
         self.velocity = other.velocity;
+        self.velocity_weight = other.velocity_weight;
         self.predicted = other.predicted;
         self.anchor = other.anchor;
         self.anchor_before = other.anchor_before;
@@ -316,6 +323,7 @@ impl ObjectState {
         self.pose = normalise(pose);
         self.predicted = self.pose;
         self.velocity = Vector6::zeros();
+        self.velocity_weight = 0.0;
         self.anchor = None;
         self.anchor_before = None;
         self.low_ticks = 0;
