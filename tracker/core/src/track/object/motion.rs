@@ -260,7 +260,7 @@ mod tests {
             (v - 0.8 * m).norm() < 1e-12 && (w - 1.0).abs() < 1e-12,
             "{v} {w}"
         );
-        // Two measurements from a reset count 1 : (0.8 x 0.2) / 0.36 apart: the later one weighs more.
+        // Of two measurements after a reset, the first counts 0.16 / 0.36 and the second 0.2 / 0.36.
         let (v1, w1) = smooth_velocity(&Vector6::zeros(), 0.0, &m, 0.2);
         let (v2, _) = smooth_velocity(&v1, w1, &Vector6::zeros(), 0.2);
         assert!((v2 - m * (0.16 / 0.36)).norm() < 1e-12, "{v2}");
