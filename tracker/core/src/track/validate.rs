@@ -180,7 +180,7 @@ fn optimiser_checks(config: &TrackerConfig) -> [Check; 6] {
 }
 
 /// The checks of the motion model, in the order they are reported.
-fn motion_checks(config: &TrackerConfig) -> [Check; 8] {
+fn motion_checks(config: &TrackerConfig) -> [Check; 9] {
     [
         Check::new(
             "inner_step_px",
@@ -213,6 +213,11 @@ fn motion_checks(config: &TrackerConfig) -> [Check; 8] {
         Check::new(
             "velocity_smoothing_depth",
             config.motion.velocity_smoothing_depth,
+            Rule::Unit,
+        ),
+        Check::new(
+            "range_acceleration_share",
+            config.motion.range_acceleration_share,
             Rule::Unit,
         ),
         Check::new(

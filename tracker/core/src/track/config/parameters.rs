@@ -55,6 +55,14 @@ grouped_parameters! {
             /// a steady motion over the first ticks. On in `config/tracker/fast-motion.toml` (BENCHMARKS.md, "The
             /// fast suite").
             velocity_start_corrected: bool = false,
+            /// Whether the prediction puts the object at the range (its centre's distance from the camera) that
+            /// the latest depth frames' estimates extrapolate to, rather than where the velocity carries it along
+            /// the line of sight: the events barely observe that motion, so between depth frames the velocity's
+            /// part along it is mostly what earlier predictions put there.
+            range_from_depth: bool = false,
+            /// With [`Self::range_from_depth`], the share in `[0, 1]` of the change in the range's rate over the last
+            /// three depth frames that the extrapolation adds (0: their latest rate alone).
+            range_acceleration_share: f64 = 1.0,
             /// Largest speed of the object centre the motion model accepts, m/s.
             max_speed: f64 = 6.0,
             /// Largest angular speed the motion model accepts, rad/s.

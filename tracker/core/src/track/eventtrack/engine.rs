@@ -205,6 +205,7 @@ impl TickEngine {
         o.state.previous = None;
         o.state.anchor = None;
         o.state.anchor_before = None;
+        o.state.ranges.clear();
         o.state.depth_fit = 1.0;
         o.state.visibility = 1.0;
         self.renderers.forget_prefetched();

@@ -81,10 +81,17 @@ pub(super) fn record_estimate(
         state.anchor_before = state.anchor;
         // A late frame anchors the estimate carried back to its exposure, by the motion its points were
         // carried by, so that anchors stay at exposures (the next frame's motion check compares frames).
-        state.anchor = Some(match state.late_motion {
+        let anchor = match state.late_motion {
             Some((exposed_us, motion)) => (exposed_us, normalise(motion.inverse() * pose)),
             None => (inputs.t_us, pose),
-        });
+        };
+        state.anchor = Some(anchor);
+        state.ranges.push(
+            anchor.0,
+            model.center_at(&anchor.1).coords.norm(),
+            config.motion.range_acceleration_share,
+            config.motion.max_speed,
+        );
     }
     if inputs.inner {
         // Steps between ticks measure no velocity (see `TickInputs::velocity_since_us`).

@@ -5,6 +5,7 @@
 use super::history::PoseHistory;
 use super::model::ObjectModel;
 use super::quality_window::QualityWindow;
+use super::range_track::RangeTrack;
 use crate::recon::{CarriedDepth, MovingNeighbourhood};
 use crate::refine::apply_step;
 use crate::track::config::{QualityConfig, TrackerConfig};
@@ -39,6 +40,9 @@ pub(crate) struct ObjectState {
     /// The estimate at the depth frame before `anchor` (time, pose): with it, the motion between the last two depth
     /// frames, which the events since cannot have changed.
     pub anchor_before: Option<(i64, Isometry3<f64>)>,
+    /// The object's range at the latest depth frames' estimates, which the prediction extrapolates along the
+    /// line of sight with [`crate::track::MotionConfig::range_from_depth`].
+    pub ranges: RangeTrack,
     /// Quality of the latest estimate, 0 (lost) to 1.
     pub quality: f32,
     /// This tick's state (the tracker's own decisions use it).
@@ -101,6 +105,7 @@ impl Clone for ObjectState {
             predicted,
             anchor,
             anchor_before,
+            ranges,
             quality,
             tracking,
             reported,
@@ -129,6 +134,7 @@ impl Clone for ObjectState {
         self.predicted = *predicted;
         self.anchor = *anchor;
         self.anchor_before = *anchor_before;
+        self.ranges = *ranges;
         self.quality = *quality;
         self.tracking = *tracking;
         self.reported = *reported;
@@ -163,6 +169,7 @@ impl ObjectState {
             predicted: pose,
             anchor: None,
             anchor_before: None,
+            ranges: RangeTrack::default(),
             quality: 1.0,
             tracking: TrackingState::Tracking,
             reported: ReportedState::new(TrackingState::Tracking),
@@ -196,6 +203,7 @@ impl ObjectState {
         self.predicted = other.predicted;
         self.anchor = other.anchor;
         self.anchor_before = other.anchor_before;
+        self.ranges = other.ranges;
         self.quality = other.quality;
         self.tracking = other.tracking;
         self.reported = other.reported;
@@ -222,15 +230,45 @@ impl ObjectState {
         config: &TrackerConfig,
     ) -> Isometry3<f64> {
         if config.motion.prediction && self.tracking != TrackingState::Lost {
+            let t_us = self.t_us + (dt_s * 1e6).round() as i64;
             let dt_s = dt_s.min(MAX_PREDICTION_S);
             let mut xi = self.velocity * (dt_s * config.motion.prediction_gain);
             if !config.motion.predict_rotation {
                 xi.fixed_rows_mut::<3>(3).fill(0.0);
             }
-            apply_step(&self.pose, &model.center_obj, &xi)
+            let pose = apply_step(&self.pose, &model.center_obj, &xi);
+            if config.motion.range_from_depth {
+                self.at_depth_range(model, pose, t_us, config)
+            } else {
+                pose
+            }
         } else {
             self.pose
         }
+    }
+
+    /// `pose` moved along the line of sight to its centre to the range the latest depth frames extrapolate to at
+    /// `t_us` ([`RangeTrack::range_at`]); `pose` itself when they do not.
+    fn at_depth_range(
+        &self,
+        model: &ObjectModel,
+        mut pose: Isometry3<f64>,
+        t_us: i64,
+        config: &TrackerConfig,
+    ) -> Isometry3<f64> {
+        let Some(range) = self.ranges.range_at(
+            t_us,
+            config.motion.range_acceleration_share,
+            config.motion.max_speed,
+        ) else {
+            return pose;
+        };
+        let c = model.center_at(&pose).coords;
+        let norm = c.norm();
+        if norm > 1e-3 && range > 1e-3 {
+            pose.translation.vector += c * (range / norm - 1.0);
+        }
+        pose
     }
 
     /// The ROI around the predicted pose, if the object is in front of the camera. At a depth exposure
@@ -326,6 +364,7 @@ impl ObjectState {
         self.velocity_weight = 0.0;
         self.anchor = None;
         self.anchor_before = None;
+        self.ranges.clear();
         self.low_ticks = 0;
         self.recent_quality.clear();
         self.history.clear();

@@ -1,0 +1,111 @@
+//! The range along the line of sight from the depth frames ([`tracker::track::MotionConfig::range_from_depth`]):
+//! between two depth frames the events barely see an object move towards or away from the camera, so the
+//! prediction extrapolates the depth frames' ranges there. These tests track a short fast depth motion of the mug
+//! with and without it.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use drivers::recording::Recording;
+use eventtrack6d_tests::tick_fixture::mug_tracker;
+use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
+use hil_sim::motion::{MotionProfile, SpeedLevel};
+use hil_sim::objects::ObjectKind;
+use scene::render::CpuRenderer;
+use std::path::Path;
+use tracker::recording::{PoseTrack, recording_ticks};
+use tracker::track::{
+    MotionConfig, OfflineTiming, PoseEstimate, TrackerConfig, track_recording_timed,
+};
+
+/// A `seconds`-long fast motion of the mug towards and away from the camera (about 2 m/s), seed 3.
+fn depth_motion_recording(dir: &Path, seconds: f64) -> Recording {
+    let cfg = GenerateConfig::new(
+        ObjectSource::Library(ObjectKind::Mug),
+        MotionProfile::DepthVariation,
+        SpeedLevel::Fast,
+        seconds,
+        3,
+    );
+    generate(&cfg, dir, |_| {}).expect("generating the depth-motion recording");
+    Recording::open(dir).expect("opening the depth-motion recording")
+}
+
+/// Tracks `rec` from the mug's first ground-truth pose with `range_from_depth` set as given; every estimate.
+fn track(rec: &Recording, range_from_depth: bool) -> Vec<PoseEstimate> {
+    let config = TrackerConfig {
+        motion: MotionConfig {
+            range_from_depth,
+            ..MotionConfig::default()
+        },
+        ..TrackerConfig::default()
+    };
+    let (mut tracker, first_us) = mug_tracker(rec, config, Box::new(CpuRenderer::new()), 1);
+    let mut out = Vec::new();
+    let timing = OfflineTiming {
+        start_us: first_us,
+        depth_latency_us: 0,
+        depth_jitter_us: 0,
+    };
+    track_recording_timed(
+        rec,
+        &mut tracker,
+        timing,
+        |_, e, _| out.extend_from_slice(e),
+        |_| {},
+    )
+    .expect("replay");
+    out
+}
+
+/// Mean absolute error of the estimates' range (the centre's distance from the camera; the mug's origin here)
+/// against the truth, metres, over the ticks that have no depth frame of their own.
+fn mean_range_error_between_depth_frames(rec: &Recording, estimates: &[PoseEstimate]) -> f64 {
+    let gt = PoseTrack::from_samples(rec.ground_truth.as_deref().expect("ground truth"), "mug");
+    let depth_us: Vec<i64> = recording_ticks(rec)
+        .expect("ticks")
+        .iter()
+        .filter(|t| t.depth_frame.is_some())
+        .map(|t| t.t_us)
+        .collect();
+    assert!(depth_us.len() > 5, "{} depth frames", depth_us.len());
+    let between: Vec<f64> = estimates
+        .iter()
+        .filter(|e| !depth_us.contains(&e.t_us))
+        .map(|e| {
+            let g = gt
+                .interpolated_at(e.t_us)
+                .expect("ground truth at the tick");
+            (g.translation.vector.norm() - e.pose.translation.vector.norm()).abs()
+        })
+        .collect();
+    assert!(
+        between.len() > 20,
+        "{} ticks between depth frames",
+        between.len()
+    );
+    between.iter().sum::<f64>() / between.len() as f64
+}
+
+/// On a fast motion along the line of sight, the range extrapolated from the depth frames keeps the estimate
+/// nearer the object between depth frames than the velocity the ticks measured does.
+#[test]
+fn ranges_from_depth_frames_follow_motion_along_the_line_of_sight() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = depth_motion_recording(&dir.path().join("depth"), 0.6);
+    let by_velocity = track(&rec, false);
+    let by_depth = track(&rec, true);
+    assert_eq!(by_velocity.len(), by_depth.len());
+    let (e_velocity, e_depth) = (
+        mean_range_error_between_depth_frames(&rec, &by_velocity),
+        mean_range_error_between_depth_frames(&rec, &by_depth),
+    );
+    eprintln!(
+        "mean range error between depth frames: by velocity {:.1} mm, from depth frames {:.1} mm",
+        e_velocity * 1e3,
+        e_depth * 1e3
+    );
+    assert!(
+        e_depth < 0.7 * e_velocity,
+        "{e_depth} against {e_velocity} m"
+    );
+}
