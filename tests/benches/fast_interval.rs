@@ -120,6 +120,7 @@ fn fast_periods(c: &mut Criterion) {
     fast.inner_steps.inner_step_px = 6.0;
     fast.inner_steps.max_inner_steps = 3;
     fast.motion.velocity_start_corrected = true;
+    fast.motion.range_from_depth = true;
     bench_periods(c, "fast_motion", &rec, &mut periods, &fast);
 }
 

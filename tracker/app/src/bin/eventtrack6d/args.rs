@@ -34,7 +34,7 @@ mod tests {
     use proptest::prelude::*;
 
     #[test]
-    fn the_shipped_fast_motion_parameters_turn_steps_between_ticks_on() {
+    fn the_shipped_fast_motion_parameters_turn_their_options_on() {
         let path =
             Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/tracker/fast-motion.toml");
         let config = tracker_params(Some(&path)).unwrap();
@@ -43,6 +43,8 @@ mod tests {
         assert_eq!(config.inner_steps.max_inner_steps, 3);
         assert!(!TrackerConfig::default().motion.velocity_start_corrected);
         assert!(config.motion.velocity_start_corrected);
+        assert!(!TrackerConfig::default().motion.range_from_depth);
+        assert!(config.motion.range_from_depth);
     }
 
     proptest! {
