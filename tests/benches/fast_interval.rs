@@ -121,6 +121,7 @@ fn fast_periods(c: &mut Criterion) {
     fast.inner_steps.max_inner_steps = 3;
     fast.motion.velocity_start_corrected = true;
     fast.motion.range_from_depth = true;
+    fast.correspond.events_at_first_pose = false;
     bench_periods(c, "fast_motion", &rec, &mut periods, &fast);
 }
 

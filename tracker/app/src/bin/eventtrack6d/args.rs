@@ -45,6 +45,8 @@ mod tests {
         assert!(config.motion.velocity_start_corrected);
         assert!(!TrackerConfig::default().motion.range_from_depth);
         assert!(config.motion.range_from_depth);
+        assert!(TrackerConfig::default().correspond.events_at_first_pose);
+        assert!(!config.correspond.events_at_first_pose);
     }
 
     proptest! {

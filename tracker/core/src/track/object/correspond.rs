@@ -151,7 +151,9 @@ pub(super) fn correspond(
         return None;
     }
     let event_term = config.event_term;
-    let use_events = config.modalities.events && !scratch.view.contour.is_empty();
+    let use_events = config.modalities.events
+        && !scratch.view.contour.is_empty()
+        && !(depth.fresh && at_first_pose(state, inputs, config));
     let use_intensity = use_events && config.intensity_term.weight > 0.0;
     let contrast_max = use_events && event_term.kind == EventTermKind::ContrastMax;
     let use_event_residuals = use_events && !contrast_max;
@@ -187,6 +189,12 @@ pub(super) fn correspond(
         use_intensity,
         window_s,
     })
+}
+
+/// Whether this tick is at the first pose's own time and the events are left out there
+/// ([`crate::track::CorrespondConfig::events_at_first_pose`] off).
+fn at_first_pose(state: &ObjectState, inputs: &TickInputs<'_>, config: &TrackerConfig) -> bool {
+    !config.correspond.events_at_first_pose && inputs.t_us <= state.first_us
 }
 
 /// The model view of the ROI render at the prediction, a late frame carried (its check at the exposure corrects
