@@ -252,7 +252,15 @@ fn clean(doc: &str) -> String {
         let after = &rest[start + 1..];
         match after.find("`]") {
             Some(end) => {
-                out.push_str(&after[..end + 1]);
+                // A sibling key, `Self::x`, is named as the table names it.
+                let code = &after[..end + 1];
+                match code.strip_prefix("`Self::") {
+                    Some(key) => {
+                        out.push('`');
+                        out.push_str(key);
+                    }
+                    None => out.push_str(code),
+                }
                 rest = &after[end + 2..];
                 // A link target in parentheses, as `[x](y)`, goes too.
                 if rest.starts_with('(')
@@ -353,7 +361,7 @@ mod tests {
     fn doc_links_lose_their_brackets() {
         assert_eq!(
             clean("see [`Self::x`] and\n [`y`](z) [plain]"),
-            "see `Self::x` and `y` [plain]"
+            "see `x` and `y` [plain]"
         );
     }
 }
