@@ -45,6 +45,22 @@ fn a_fast_replay_gives_the_offline_poses_exactly() {
     replay_matches_offline(0, 0);
 }
 
+/// With `config/tracker/fast-motion.toml`'s parameters the tracker also refines between ticks, as the events past
+/// each step's time arrive: in the runtime they come in batches of 53 us, offline between two trigger edges at
+/// once, and the steps see the same events either way.
+#[test]
+fn a_fast_replay_with_steps_between_ticks_gives_the_offline_poses_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec_dir = dir.path().join("rec");
+    let rec = mug_and_can_recording(&rec_dir);
+    let params = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/tracker/fast-motion.toml"),
+    )
+    .unwrap();
+    let (counters, _) = compare_replay_with_offline(dir.path(), &rec_dir, rec, 0, 0, &params);
+    assert!(counters.inner_steps >= counters.ticks, "{counters:?}");
+}
+
 /// With depth frames delivered 40 ms after their exposure (`[source] depth_latency_ms`, `track
 /// --depth-latency-ms`), both hand each frame over before the same tick: the replay between two ticks, when the
 /// stream reaches that time, the offline driver just before the tick after it. The tracker tracks again from
@@ -107,7 +123,7 @@ fn replay_matches_offline(latency_us: i64, jitter_us: i64) -> TrackerCounters {
     let dir = tempfile::tempdir().unwrap();
     let rec_dir = dir.path().join("rec");
     let rec = mug_and_can_recording(&rec_dir);
-    compare_replay_with_offline(dir.path(), &rec_dir, rec, latency_us, jitter_us).0
+    compare_replay_with_offline(dir.path(), &rec_dir, rec, latency_us, jitter_us, "").0
 }
 
 /// [`replay_matches_offline`] on a copy of the scene whose events lack the trigger pulses `dropped` and have the
@@ -181,24 +197,29 @@ fn replay_matches_offline_with(
     );
     std::fs::rename(&thinned, &events).unwrap();
     let rec = drivers::recording::Recording::open(&rec_dir).unwrap();
-    compare_replay_with_offline(dir.path(), &rec_dir, rec, latency_us, jitter_us).1
+    compare_replay_with_offline(dir.path(), &rec_dir, rec, latency_us, jitter_us, "").1
 }
 
-/// Tracks `rec` offline and through the runtime, checks both gave the same estimates and counters, and returns
-/// the counters and how many ticks the runtime's timeline synthesised.
+/// Tracks `rec` offline and through the runtime with the tracker parameters `params` (the keys of the runtime's
+/// `[tracker.parameters]` table; empty for the defaults), checks both gave the same estimates and counters, and
+/// returns the counters and how many ticks the runtime's timeline synthesised.
 fn compare_replay_with_offline(
     dir: &std::path::Path,
     rec_dir: &std::path::Path,
     rec: drivers::recording::Recording,
     latency_us: i64,
     jitter_us: i64,
+    params: &str,
 ) -> (TrackerCounters, u64) {
+    let out_dir = dir.join("out");
+    let config = replay_config(rec_dir, &out_dir, latency_us, jitter_us, params);
+    let tracker_config = config.tracker.parameters.clone();
     // Offline, as `bench` runs it.
     let scene = recording_scene(&rec, &[]).unwrap();
     let mut tracker = build_tracker(
         "eventtrack6d",
         RendererKind::Cpu,
-        &TrackerConfig::default(),
+        &tracker_config,
         &scene,
         &rec.meta.trigger.timeline_config(),
     )
@@ -212,35 +233,7 @@ fn compare_replay_with_offline(
     assert!(stats.ticks >= 50 && stats.depth_frames >= 11, "{stats:?}");
     let offline_counters = tracker.tracker_counters().expect("the tracker counts");
 
-    // Through the runtime, with small event batches so that batch edges fall everywhere.
-    let out_dir = dir.join("out");
-    let toml = format!(
-        r#"
-[source]
-kind = "replay"
-pace = "fast"
-depth_latency_ms = {}
-depth_latency_jitter_ms = {}
-[replay]
-recording = "{}"
-[tracker]
-method = "eventtrack6d"
-[output]
-dir = "{}"
-[queue]
-batch_us = 53
-[sinks]
-csv = true
-zenoh = false
-[can]
-enabled = false
-"#,
-        latency_us as f64 * 1e-3,
-        jitter_us as f64 * 1e-3,
-        rec_dir.display(),
-        out_dir.display()
-    );
-    let config = runtime::config::from_toml(&toml, "replay.toml").unwrap();
+    // Through the runtime.
     let summary = runtime::run(&config, Hooks::default()).expect("the replay failed");
     assert_eq!(summary.queue.dropped_events, 0);
     let csv = std::fs::read_to_string(summary.outputs.csv.clone().unwrap()).unwrap();
@@ -258,15 +251,36 @@ enabled = false
     for (r, o) in replayed.iter().zip(&offline) {
         assert_eq!(*r, o, "the replay's estimate differs from the offline one");
     }
-    // The run reports what the tracker did, and it did the same.
-    assert_eq!(summary.tracker, Some(offline_counters));
+    // The run reports what the tracker did, and it did the same, but for the steps planned after the last tick
+    // (and the renders each prefetched for the object it refines): the replay hands over the events after that
+    // tick, which run them, and the offline driver does not.
+    let replayed_counters = summary.tracker.expect("the run counts");
+    let after_last_tick = replayed_counters.inner_steps - offline_counters.inner_steps;
+    let renders_after = replayed_counters.renders_prefetched - offline_counters.renders_prefetched;
+    let objects = scene.objects.len() as u64;
+    assert!(
+        after_last_tick <= u64::from(tracker_config.inner_steps.max_inner_steps)
+            && renders_after <= after_last_tick * objects
+            && replayed_counters.prefetched_renders_used - offline_counters.prefetched_renders_used
+                == renders_after,
+        "{replayed_counters:?} against {offline_counters:?}"
+    );
+    assert_eq!(
+        TrackerCounters {
+            inner_steps: offline_counters.inner_steps,
+            renders_prefetched: offline_counters.renders_prefetched,
+            prefetched_renders_used: offline_counters.prefetched_renders_used,
+            ..replayed_counters
+        },
+        offline_counters
+    );
     assert_eq!(
         summary.status["tracker"]["depth_frames"],
         offline_counters.depth_frames
     );
     assert!(summary.to_string().contains(&format!(
         "tracker:         {} steps between ticks, {} re-detections",
-        offline_counters.inner_steps, offline_counters.redetections
+        replayed_counters.inner_steps, offline_counters.redetections
     )));
     assert_eq!(
         summary.source_stats.depth_frames, stats.depth_frames,
@@ -309,4 +323,46 @@ enabled = false
     )));
     assert_eq!(summary.event_hold_overflows, 0);
     (offline_counters, summary.timeline.missing)
+}
+
+/// The runtime's configuration that replays `rec_dir` as fast as it can into a pose CSV under `out_dir`, in event
+/// batches of 53 us so that batch edges fall everywhere, with depth frames `latency_us` late plus up to
+/// `jitter_us` and the tracker parameters `params`.
+fn replay_config(
+    rec_dir: &std::path::Path,
+    out_dir: &std::path::Path,
+    latency_us: i64,
+    jitter_us: i64,
+    params: &str,
+) -> runtime::config::Config {
+    let toml = format!(
+        r#"
+[source]
+kind = "replay"
+pace = "fast"
+depth_latency_ms = {}
+depth_latency_jitter_ms = {}
+[replay]
+recording = "{}"
+[tracker]
+method = "eventtrack6d"
+[tracker.parameters]
+{}
+[output]
+dir = "{}"
+[queue]
+batch_us = 53
+[sinks]
+csv = true
+zenoh = false
+[can]
+enabled = false
+"#,
+        latency_us as f64 * 1e-3,
+        jitter_us as f64 * 1e-3,
+        rec_dir.display(),
+        params,
+        out_dir.display()
+    );
+    runtime::config::from_toml(&toml, "replay.toml").unwrap()
 }
