@@ -337,3 +337,30 @@ fn ground_truth_must_cover_the_ticks_it_scores() {
         "quality `1.5` is not in [0, 1]",
     );
 }
+
+#[test]
+fn demo_parameters_are_checked_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cache = d.join("cache");
+    let cache_s = cache.to_str().unwrap();
+    for (name, text, needle) in [
+        ("unknown.toml", "no_such_key = 1\n", "no_such_key"),
+        ("negative.toml", "inner_step_px = -1.0\n", "inner_step_px"),
+    ] {
+        let params = d.join(name);
+        std::fs::write(&params, text).unwrap();
+        let params_s = params.to_str().unwrap();
+        let args = [
+            "demo",
+            "--params",
+            params_s,
+            "--cache-dir",
+            cache_s,
+            "--no-zenoh",
+        ];
+        fails_with(&args, &format!("{params_s}: invalid tracker parameters"));
+        fails_with(&args, needle);
+        assert!(!cache.exists(), "{name}: the demo generated a sequence");
+    }
+}

@@ -69,6 +69,11 @@ pub struct DemoArgs {
     /// (`[source] depth_latency_jitter_ms`; default 0).
     #[arg(long, value_name = "MS", value_parser = crate::args::parse_latency_ms)]
     pub depth_latency_jitter_ms: Option<f64>,
+    /// Tracker parameters in place of the configuration's `[tracker.parameters]`: a TOML file with their keys at
+    /// top level, as for `track --params` (docs/tracker.md), e.g. config/tracker/fast-motion.toml with
+    /// `--speed fast`. Unknown keys are errors.
+    #[arg(long, value_name = "TOML")]
+    pub params: Option<PathBuf>,
 }
 
 /// Writes an image strip of six overlays (reconstructed intensity `I_t` with the model outline at the published
@@ -123,6 +128,9 @@ pub fn run(args: &DemoArgs) -> Result<()> {
     }
     if let Some(p) = &args.latency_log {
         config.output.latency_log = Some(session::from_working_dir(p)?);
+    }
+    if let Some(p) = &args.params {
+        config.tracker.parameters = crate::args::tracker_params(Some(p))?;
     }
     config::validate(&config, "eventtrack6d demo")?;
     let cache = args
