@@ -12,7 +12,10 @@ use scene::render::Renderer;
 use std::path::Path;
 use tracker::recording::{PoseTrack, recording_ticks};
 use tracker::recording::{recording_object, recording_rig};
-use tracker::track::{EventTrack6d, PoseTracker, TrackerConfig, TrackerCounters, track_recording};
+use tracker::track::{
+    EventTrack6d, OfflineTiming, PoseEstimate, PoseTracker, TrackerConfig, TrackerCounters,
+    track_recording, track_recording_timed,
+};
 
 /// A warmed-up tracker and what to feed it for one more tick.
 pub struct SteadyTracker {
@@ -174,6 +177,32 @@ pub fn mug_tracker(
     let rig = recording_rig(recording).expect("rig");
     let tracker = EventTrack6d::new(config, rig, all, renderer).expect("tracker");
     (tracker, first.t_us)
+}
+
+/// Every estimate of `recording` tracked offline from the mug's first ground-truth pose with `config` and the CPU
+/// renderer, the depth frames on time.
+pub fn mug_estimates(recording: &Recording, config: TrackerConfig) -> Vec<PoseEstimate> {
+    let (mut tracker, first_us) = mug_tracker(
+        recording,
+        config,
+        Box::new(scene::render::CpuRenderer::new()),
+        1,
+    );
+    let timing = OfflineTiming {
+        start_us: first_us,
+        depth_latency_us: 0,
+        depth_jitter_us: 0,
+    };
+    let mut out = Vec::new();
+    track_recording_timed(
+        recording,
+        &mut tracker,
+        timing,
+        |_, e, _| out.extend_from_slice(e),
+        |_| {},
+    )
+    .expect("replay");
+    out
 }
 
 /// Tracks `rec` offline with `tracker` as `bench` does, from `timing`, and returns every estimate as its pose CSV

@@ -4,31 +4,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use drivers::recording::Recording;
-use eventtrack6d_tests::tick_fixture::{fast_mug_recording, mug_tracker};
-use scene::render::CpuRenderer;
-use tracker::track::{
-    CorrespondConfig, ModalityConfig, OfflineTiming, PoseEstimate, TrackerConfig,
-    track_recording_timed,
-};
+use eventtrack6d_tests::tick_fixture::{fast_mug_recording, mug_estimates};
+use tracker::track::{CorrespondConfig, ModalityConfig, PoseEstimate, TrackerConfig};
 
 /// Every estimate of `rec` tracked from the mug's first ground-truth pose with `config`.
 fn track(rec: &Recording, config: TrackerConfig) -> Vec<PoseEstimate> {
-    let (mut tracker, first_us) = mug_tracker(rec, config, Box::new(CpuRenderer::new()), 1);
-    let mut out = Vec::new();
-    let timing = OfflineTiming {
-        start_us: first_us,
-        depth_latency_us: 0,
-        depth_jitter_us: 0,
-    };
-    track_recording_timed(
-        rec,
-        &mut tracker,
-        timing,
-        |_, e, _| out.extend_from_slice(e),
-        |_| {},
-    )
-    .expect("replay");
-    out
+    mug_estimates(rec, config)
 }
 
 fn with(events_at_first_pose: bool, events: bool) -> TrackerConfig {

@@ -6,16 +6,13 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use drivers::recording::Recording;
-use eventtrack6d_tests::tick_fixture::mug_tracker;
+use eventtrack6d_tests::tick_fixture::mug_estimates;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
-use scene::render::CpuRenderer;
 use std::path::Path;
 use tracker::recording::{PoseTrack, recording_ticks};
-use tracker::track::{
-    MotionConfig, OfflineTiming, PoseEstimate, TrackerConfig, track_recording_timed,
-};
+use tracker::track::{MotionConfig, PoseEstimate, TrackerConfig};
 
 /// A `seconds`-long fast motion of the mug towards and away from the camera (about 2 m/s), seed 3.
 fn depth_motion_recording(dir: &Path, seconds: f64) -> Recording {
@@ -39,22 +36,7 @@ fn track(rec: &Recording, range_from_depth: bool) -> Vec<PoseEstimate> {
         },
         ..TrackerConfig::default()
     };
-    let (mut tracker, first_us) = mug_tracker(rec, config, Box::new(CpuRenderer::new()), 1);
-    let mut out = Vec::new();
-    let timing = OfflineTiming {
-        start_us: first_us,
-        depth_latency_us: 0,
-        depth_jitter_us: 0,
-    };
-    track_recording_timed(
-        rec,
-        &mut tracker,
-        timing,
-        |_, e, _| out.extend_from_slice(e),
-        |_| {},
-    )
-    .expect("replay");
-    out
+    mug_estimates(rec, config)
 }
 
 /// Mean absolute error of the estimates' range (the centre's distance from the camera; the mug's origin here)
