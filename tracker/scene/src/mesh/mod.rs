@@ -9,6 +9,7 @@ mod error;
 mod info;
 mod measure;
 mod obj;
+mod obj_precheck;
 mod simplify;
 pub(crate) mod texture;
 

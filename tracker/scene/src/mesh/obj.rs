@@ -1,5 +1,6 @@
 //! Wavefront OBJ loading (via `tobj`) with MTL materials and PNG/JPEG diffuse textures.
 
+use super::obj_precheck::{face_index_out_of_range, short_colour_line};
 use super::texture::srgb_to_linear;
 use super::{Material, Mesh, MeshError, MeshParts, MeshWarning, Texture};
 use nalgebra::{Point3, Vector3};
@@ -97,23 +98,6 @@ fn convert_materials(
         .collect()
 }
 
-/// The first colour line (`Ka`, `Kd`, `Ks`, `Ke`) of an MTL file with fewer than three numbers, as the reason to
-/// refuse the file: `tobj` 4 panics on such a line instead of reporting it.
-fn short_colour_line(mtl: &[u8]) -> Option<String> {
-    let text = String::from_utf8_lossy(mtl);
-    text.lines().enumerate().find_map(|(i, line)| {
-        let mut words = line.split_whitespace();
-        let key = words.next()?;
-        let found = words.count();
-        (matches!(key, "Ka" | "Kd" | "Ks" | "Ke") && found < 3).then(|| {
-            format!(
-                "line {}: `{key}` needs three numbers (red, green, blue), found {found}",
-                i + 1
-            )
-        })
-    })
-}
-
 /// Loads an OBJ file (triangulating polygons) with its MTL materials and diffuse textures, scaled by
 /// `options.scale` into metres.
 ///
@@ -127,6 +111,13 @@ pub fn load_obj(path: &Path, options: &MeshLoadOptions) -> Result<LoadedMesh, Me
         });
     }
     let bytes = read_file(path)?;
+    if let Some(reason) = face_index_out_of_range(&bytes) {
+        return Err(MeshError::Parse {
+            path: path.to_path_buf(),
+            kind: "OBJ",
+            reason,
+        });
+    }
     let obj_dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     // The material loader cannot return our error type; remember which MTL failed and why.
     let mtl_failure: RefCell<Option<MeshError>> = RefCell::new(None);
