@@ -3,8 +3,8 @@
 //! the depth frame at a depth-exposure tick, the tick and `prepare_next_tick`, as the runtime runs them. Each sample
 //! is the CPU time of every thread of the process (the tracker's and the `render-ahead` thread) over consecutive
 //! periods of the recording, replayed from its first pose again when it ends (the new tracker is not timed).
-//! `ticks_only`: the default; `fast_motion`: steps between ticks as `config/tracker/fast-motion.toml` sets
-//! them.
+//! `defaults`: steps between ticks; `ticks_only`: one refinement per tick, as `config/tracker/ticks-only.toml`
+//! sets it.
 
 // `criterion_group!` defines undocumented public functions.
 #![allow(missing_docs)]
@@ -15,6 +15,7 @@ use drivers::event::{CdEvent, EventBuffer};
 use drivers::recording::{DepthFrame, Recording};
 use drivers::timeline::Tick;
 use eventtrack6d_tests::cpu_time::process_cpu_ns;
+use eventtrack6d_tests::shipped_params::ticks_only;
 use eventtrack6d_tests::tick_fixture::{fast_mug_recording, mug_tracker};
 use scene::render::CpuRenderer;
 use std::time::Duration;
@@ -108,21 +109,8 @@ fn fast_periods(c: &mut Criterion) {
     let dir = std::env::temp_dir().join("eventtrack6d-fast-period-bench");
     let rec = fast_mug_recording(&dir, 0.8);
     let mut periods = periods(&rec);
-    bench_periods(
-        c,
-        "ticks_only",
-        &rec,
-        &mut periods,
-        &TrackerConfig::default(),
-    );
-    // `config/tracker/fast-motion.toml`.
-    let mut fast = TrackerConfig::default();
-    fast.inner_steps.inner_step_px = 6.0;
-    fast.inner_steps.max_inner_steps = 3;
-    fast.motion.velocity_start_corrected = true;
-    fast.motion.range_from_depth = true;
-    fast.correspond.events_at_first_pose = false;
-    bench_periods(c, "fast_motion", &rec, &mut periods, &fast);
+    bench_periods(c, "defaults", &rec, &mut periods, &TrackerConfig::default());
+    bench_periods(c, "ticks_only", &rec, &mut periods, &ticks_only());
 }
 
 criterion_group!(benches, fast_periods);

@@ -231,12 +231,17 @@ fn the_objects_of_a_recording_are_tracked_together() {
     for (r, h) in results.iter().zip(&held.sequences) {
         assert!(r.records.len() >= ticks.len() - 1, "{}", r.records.len());
         assert!(r.records.iter().all(|p| p.object == r.scores.object));
-        // Each is followed: closer to the truth than its first pose held still.
+        // Each is followed: closer to the truth than its first pose held still, by ADD-S (the can's turn about its
+        // axis shows in neither its depth nor its outline, so ADD does not say whether it was followed).
         let (s, h) = (
             r.scores.summary(false, AucLimit::Diameter),
             h.scores.summary(false, AucLimit::Diameter),
         );
-        assert!(s.add > h.add, "{}: {s:?} against {h:?}", r.scores.object);
+        assert!(
+            s.add_s > h.add_s + 10.0,
+            "{}: {s:?} against {h:?}",
+            r.scores.object
+        );
     }
     // Tracked together: one tracker run, each object charged half of it.
     assert_eq!(results[0].seconds, results[1].seconds);

@@ -11,6 +11,7 @@
 use drivers::event::CdEvent;
 use drivers::recording::{DepthFrame, Recording};
 use drivers::timeline::Tick;
+use eventtrack6d_tests::shipped_params::ticks_only;
 use eventtrack6d_tests::tick_fixture::mug_recording;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
@@ -325,19 +326,23 @@ fn late_checks(
 }
 
 /// Depth frames 40 ms late on a moderate mug shake, carried from their exposure (`retrack_late_depth = false`):
-/// each is checked at its exposure, against the estimate the pose history holds for then, by the same rule. An estimate knocked 5 cm off at a depth exposure is found out by that
-/// frame when it arrives, and replaced there by a candidate from the frame before. (At the tick the frame arrives
-/// at, its points are carried by the motion estimated since, so they would agree with a wrong estimate.)
+/// each is checked at its exposure, against the estimate the pose history holds for then, by the same rule. An
+/// estimate knocked 5 cm off at a depth exposure is found out by that frame when it arrives, and replaced there
+/// by a candidate from the frame before. (At the tick the frame arrives at, its points are carried by the motion
+/// estimated since, so they would agree with a wrong estimate.) One refinement per tick
+/// (`config/tracker/ticks-only.toml`), so that the candidates start from a history of the ticks alone: steps
+/// between ticks after the knock move the history the extrapolated candidate starts from (12 mm off then).
 #[test]
 fn late_frames_are_checked_at_their_exposure() {
     let dir = tempfile::tempdir().unwrap();
     let recording = mug_recording(&dir.path().join("mug"), 1.0);
+    let base = ticks_only();
     let carrying = TrackerConfig {
         late_depth: LateDepthConfig {
             retrack_late_depth: false,
-            ..Default::default()
+            ..base.late_depth
         },
-        ..TrackerConfig::default()
+        ..base
     };
     let (truth, first, inner) = tracker_from_truth_with(&recording, "mug", carrying);
     // Knocked off at the 11th depth exposure.

@@ -7,6 +7,7 @@
 use drivers::event::CdEvent;
 use drivers::recording::{DepthFrame, Recording};
 use drivers::timeline::Tick;
+use eventtrack6d_tests::shipped_params::ticks_only;
 use eventtrack6d_tests::tick_fixture::{fast_mug_recording, mug_tracker};
 use scene::render::CpuRenderer;
 use tracker::recording::PoseTrack;
@@ -15,14 +16,16 @@ use tracker::track::{
     TrackerConfig, track_recording_timed,
 };
 
-/// The tracker configuration with steps between ticks every `step_px` pixels (0: off).
+/// The tracker configuration with steps between ticks every `step_px` pixels (0: off), the other options as
+/// `config/tracker/ticks-only.toml` sets them, so that only the steps differ from one refinement per tick.
 fn config(step_px: f64) -> TrackerConfig {
+    let base = ticks_only();
     TrackerConfig {
         inner_steps: InnerStepConfig {
             inner_step_px: step_px,
-            ..InnerStepConfig::default()
+            ..base.inner_steps
         },
-        ..TrackerConfig::default()
+        ..base
     }
 }
 

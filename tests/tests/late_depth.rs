@@ -8,6 +8,7 @@
 use drivers::event::CdEvent;
 use drivers::recording::{DepthFrame, Recording};
 use drivers::timeline::Tick;
+use eventtrack6d_tests::shipped_params::ticks_only;
 use eventtrack6d_tests::tick_fixture::mug_recording;
 use nalgebra::Isometry3;
 use scene::geometry::se3;
@@ -430,6 +431,10 @@ fn pose_at_answers_from_the_corrected_history() {
         let p = tracker.pose_at(0, e.t_us).expect("a kept tick");
         assert_eq!(p.pose, e.pose, "at {} us", e.t_us);
     }
+    // Between two ticks it interpolates them when no step between ticks ran there (with steps, it answers from
+    // the steps: tests/tests/inner_steps.rs).
+    let (on_time, tracker, _) = track(&rec, ticks_only(), 0);
+    let recent = &on_time[on_time.len() - 40..];
     let (a, b) = (recent[10], recent[11]);
     let t = a.t_us + (b.t_us - a.t_us) / 3;
     let between = tracker.pose_at(0, t).unwrap().pose;

@@ -6,6 +6,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use drivers::recording::Recording;
+use eventtrack6d_tests::shipped_params::ticks_only;
 use eventtrack6d_tests::tick_fixture::mug_estimates;
 use hil_sim::generate::{GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
@@ -29,12 +30,13 @@ fn depth_motion_recording(dir: &Path, seconds: f64) -> Recording {
 
 /// Tracks `rec` from the mug's first ground-truth pose with `range_from_depth` set as given; every estimate.
 fn track(rec: &Recording, range_from_depth: bool) -> Vec<PoseEstimate> {
+    let base = ticks_only();
     let config = TrackerConfig {
         motion: MotionConfig {
             range_from_depth,
-            ..MotionConfig::default()
+            ..base.motion
         },
-        ..TrackerConfig::default()
+        ..base
     };
     mug_estimates(rec, config)
 }

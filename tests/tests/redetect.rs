@@ -31,6 +31,12 @@ struct Run {
     late_depth_unplaced: u64,
 }
 
+/// The most renders one tick period of a single object may take while re-detection spreads its search over
+/// ticks: the tick's own, two per place checked, and one per step between ticks.
+fn renders_per_period_bound(config: &TrackerConfig) -> usize {
+    1 + 2 * config.redetect.places_per_tick + config.inner_steps.max_inner_steps as usize
+}
+
 fn run(recording: &Recording, config: TrackerConfig) -> Run {
     run_late(recording, config, 0)
 }
@@ -134,9 +140,9 @@ fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
     );
 
     // With it, the object is found within those ticks and tracked from then on, and no tick checks more than
-    // `places_per_tick` places (two renders each, besides the tick's own).
+    // `places_per_tick` places (two renders each, besides the tick's own and one per step between ticks).
     let config = TrackerConfig::default();
-    let bound = 1 + 2 * config.redetect.places_per_tick;
+    let bound = renders_per_period_bound(&config);
     let Run {
         errors,
         redetections,
@@ -175,7 +181,7 @@ fn an_object_the_tracker_starts_off_is_found_again_from_the_depth_background() {
 fn a_search_checks_all_its_places_in_one_tick_only_when_asked() {
     let (_dir, recording) = moving_mug(0.5);
     let spread = TrackerConfig::default();
-    let bound = 1 + 2 * spread.redetect.places_per_tick;
+    let bound = renders_per_period_bound(&spread);
     let mut at_once = spread.clone();
     at_once.redetect.places_per_tick = 0;
     let spread = run(&recording, spread);

@@ -8,6 +8,8 @@
 
 use eventtrack6d::runtime::setup::recording_scene;
 use eventtrack6d::runtime::{self, Hooks, build_tracker};
+use eventtrack6d_tests::replay_counters::assert_counters_match_offline;
+use eventtrack6d_tests::shipped_params::ticks_only_toml;
 use eventtrack6d_tests::tick_fixture::{
     mug_and_can_recording, mug_recording, offline_pose_rows, steady_tracker,
 };
@@ -40,25 +42,21 @@ fn a_pushed_depth_frame_moves_in_and_the_previous_one_comes_back() {
     );
 }
 
+/// By default the tracker also refines between ticks, as the events past each step's time arrive: in the
+/// runtime they come in batches of 53 us, offline between two trigger edges at once, and the steps see the same
+/// events either way. With `config/tracker/ticks-only.toml` it refines once per tick, and the replay and the
+/// offline driver agree as well, counters and all.
 #[test]
-fn a_fast_replay_gives_the_offline_poses_exactly() {
-    replay_matches_offline(0, 0);
-}
-
-/// With `config/tracker/fast-motion.toml`'s parameters the tracker also refines between ticks, as the events past
-/// each step's time arrive: in the runtime they come in batches of 53 us, offline between two trigger edges at
-/// once, and the steps see the same events either way.
-#[test]
-fn a_fast_replay_with_steps_between_ticks_gives_the_offline_poses_exactly() {
+fn a_fast_replay_gives_the_offline_poses_exactly_with_or_without_steps_between_ticks() {
+    let steps = replay_matches_offline(0, 0);
+    assert!(steps.inner_steps >= steps.ticks, "{steps:?}");
     let dir = tempfile::tempdir().unwrap();
     let rec_dir = dir.path().join("rec");
     let rec = mug_and_can_recording(&rec_dir);
-    let params = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../config/tracker/fast-motion.toml"),
-    )
-    .unwrap();
-    let (counters, _) = compare_replay_with_offline(dir.path(), &rec_dir, rec, 0, 0, &params);
-    assert!(counters.inner_steps >= counters.ticks, "{counters:?}");
+    let (ticks_only, _) =
+        compare_replay_with_offline(dir.path(), &rec_dir, rec, 0, 0, &ticks_only_toml());
+    assert_eq!(ticks_only.inner_steps, 0, "{ticks_only:?}");
+    assert_eq!(ticks_only.ticks, steps.ticks);
 }
 
 /// With depth frames delivered 40 ms after their exposure (`[source] depth_latency_ms`, `track
@@ -251,28 +249,13 @@ fn compare_replay_with_offline(
     for (r, o) in replayed.iter().zip(&offline) {
         assert_eq!(*r, o, "the replay's estimate differs from the offline one");
     }
-    // The run reports what the tracker did, and it did the same, but for the steps planned after the last tick
-    // (and the renders each prefetched for the object it refines): the replay hands over the events after that
-    // tick, which run them, and the offline driver does not.
     let replayed_counters = summary.tracker.expect("the run counts");
-    let after_last_tick = replayed_counters.inner_steps - offline_counters.inner_steps;
-    let renders_after = replayed_counters.renders_prefetched - offline_counters.renders_prefetched;
-    let objects = scene.objects.len() as u64;
-    assert!(
-        after_last_tick <= u64::from(tracker_config.inner_steps.max_inner_steps)
-            && renders_after <= after_last_tick * objects
-            && replayed_counters.prefetched_renders_used - offline_counters.prefetched_renders_used
-                == renders_after,
-        "{replayed_counters:?} against {offline_counters:?}"
-    );
-    assert_eq!(
-        TrackerCounters {
-            inner_steps: offline_counters.inner_steps,
-            renders_prefetched: offline_counters.renders_prefetched,
-            prefetched_renders_used: offline_counters.prefetched_renders_used,
-            ..replayed_counters
-        },
-        offline_counters
+    assert_counters_match_offline(
+        &replayed_counters,
+        &offline_counters,
+        tracker_config.inner_steps.max_inner_steps,
+        scene.objects.len() as u64,
+        latency_us + jitter_us > 0,
     );
     assert_eq!(
         summary.status["tracker"]["depth_frames"],

@@ -99,19 +99,27 @@ mod tests {
         let obj = b"v 0 0 0\nvt 0 0\nv 0 0 0\nf 1/-99999999999 1 1\n";
         let reason = face_index_out_of_range(obj).expect("refused");
         assert!(reason.starts_with("line 4:"), "{reason}");
-        assert!(reason.contains("texture coordinate -99999999999"), "{reason}");
+        assert!(
+            reason.contains("texture coordinate -99999999999"),
+            "{reason}"
+        );
     }
 
     #[test]
     fn positions_past_the_last_and_index_zero_are_refused() {
         assert!(face_index_out_of_range(b"v 0 0 0\nf 1 1 2\n").is_some());
         assert!(face_index_out_of_range(b"v 0 0 0\nf 1 0 1\n").is_some());
-        assert!(face_index_out_of_range(b"v 0 0 0\nvn 0 0 1\nf 1//9223372036854775807 1 1\n").is_some());
+        assert!(
+            face_index_out_of_range(b"v 0 0 0\nvn 0 0 1\nf 1//9223372036854775807 1 1\n").is_some()
+        );
     }
 
     #[test]
     fn normal_indices_without_normals_are_left_to_tobj() {
-        assert_eq!(face_index_out_of_range(b"v 0 0 0\nf 1//5 1//5 1//5\n"), None);
+        assert_eq!(
+            face_index_out_of_range(b"v 0 0 0\nf 1//5 1//5 1//5\n"),
+            None
+        );
     }
 
     #[test]

@@ -34,19 +34,19 @@ mod tests {
     use proptest::prelude::*;
 
     #[test]
-    fn the_shipped_fast_motion_parameters_turn_their_options_on() {
+    fn the_shipped_ticks_only_parameters_turn_the_fast_motion_options_off() {
         let path =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/tracker/fast-motion.toml");
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/tracker/ticks-only.toml");
         let config = tracker_params(Some(&path)).unwrap();
-        assert_eq!(TrackerConfig::default().inner_steps.inner_step_px, 0.0);
-        assert_eq!(config.inner_steps.inner_step_px, 6.0);
-        assert_eq!(config.inner_steps.max_inner_steps, 3);
-        assert!(!TrackerConfig::default().motion.velocity_start_corrected);
-        assert!(config.motion.velocity_start_corrected);
-        assert!(!TrackerConfig::default().motion.range_from_depth);
-        assert!(config.motion.range_from_depth);
-        assert!(TrackerConfig::default().correspond.events_at_first_pose);
-        assert!(!config.correspond.events_at_first_pose);
+        let defaults = TrackerConfig::default();
+        assert_eq!(defaults.inner_steps.inner_step_px, 6.0);
+        assert_eq!(config.inner_steps.inner_step_px, 0.0);
+        assert!(defaults.motion.velocity_start_corrected);
+        assert!(!config.motion.velocity_start_corrected);
+        assert!(defaults.motion.range_from_depth);
+        assert!(!config.motion.range_from_depth);
+        assert!(!defaults.correspond.events_at_first_pose);
+        assert!(config.correspond.events_at_first_pose);
     }
 
     proptest! {

@@ -70,8 +70,8 @@ pub struct DemoArgs {
     #[arg(long, value_name = "MS", value_parser = crate::args::parse_latency_ms)]
     pub depth_latency_jitter_ms: Option<f64>,
     /// Tracker parameters in place of the configuration's `[tracker.parameters]`: a TOML file with their keys at
-    /// top level, as for `track --params` (docs/tracker.md), e.g. config/tracker/fast-motion.toml with
-    /// `--speed fast`. Unknown keys are errors.
+    /// top level, as for `track --params` (docs/tracker.md), e.g. config/tracker/ticks-only.toml
+    /// (half the CPU on fast objects). Unknown keys are errors.
     #[arg(long, value_name = "TOML")]
     pub params: Option<PathBuf>,
 }

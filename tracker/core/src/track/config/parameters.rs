@@ -52,14 +52,13 @@ grouped_parameters! {
             /// Whether the smoothing is corrected for the zero the velocity starts from (at the first pose and
             /// after a re-detection): each measurement then counts by its weight relative to all weight measured
             /// since, so the first sets the velocity outright, where the plain average reaches 0.2, 0.36, 0.49 of
-            /// a steady motion over the first ticks. On in `config/tracker/fast-motion.toml` (BENCHMARKS.md, "The
-            /// fast suite").
-            velocity_start_corrected: bool = false,
+            /// a steady motion over the first ticks (BENCHMARKS.md, "The fast suite").
+            velocity_start_corrected: bool = true,
             /// Whether the prediction puts the object at the range (its centre's distance from the camera) that
             /// the latest depth frames' estimates extrapolate to, rather than where the velocity carries it along
             /// the line of sight: the events barely observe that motion, so between depth frames the velocity's
             /// part along it is mostly what earlier predictions put there.
-            range_from_depth: bool = false,
+            range_from_depth: bool = true,
             /// With [`Self::range_from_depth`], the share in `[0, 1]` of the change in the range's rate over the last
             /// three depth frames that the extrapolation adds (0: their latest rate alone).
             range_acceleration_share: f64 = 1.0,
@@ -74,10 +73,11 @@ grouped_parameters! {
         /// its velocity, quality or state.
         inner_steps: InnerStepConfig {
             /// An object gets one step between ticks for every this many pixels its outline moves per tick at its
-            /// estimated speed (beyond the first): at 25 px per tick and 6 px, three steps. 0 (the default) turns
-            /// steps between ticks off: 6 lifts the `fast` suite from 35.1 to 45-49 ADD-S (BENCHMARKS.md, "The fast
-            /// suite"); `config/tracker/fast-motion.toml` turns them on.
-            inner_step_px: f64 = 0.0,
+            /// estimated speed (beyond the first): at 25 px per tick and 6 px, three steps. 0 turns steps between
+            /// ticks off (as `config/tracker/ticks-only.toml` does, at half the CPU on a fast object); on fast
+            /// recordings no tuning saw, that cost 8.5 ADD-S points with the other options on (BENCHMARKS.md, "The
+            /// fast suite").
+            inner_step_px: f64 = 6.0,
             /// Most steps between two ticks (the CPU a tick may cost: each step costs about what a tick does).
             max_inner_steps: u32 = 3,
             /// Standard deviation of a step's motion along the line of sight to the object beyond its prediction,
@@ -99,8 +99,8 @@ grouped_parameters! {
             /// Whether the tick at the first pose's own time uses the events when it has a depth frame. Their window
             /// is sized for an object at rest (nothing has measured its speed yet) and holds the motion into the
             /// first pose: on the `fast` suite they moved the exact first pose by 4.1 mm on average (up to 21 mm),
-            /// against 1.3 mm on depth alone. Off in `config/tracker/fast-motion.toml`.
-            events_at_first_pose: bool = true,
+            /// against 1.3 mm on depth alone.
+            events_at_first_pose: bool = false,
             /// Most model surface samples per tick.
             max_surface_points: usize = 600,
             /// Most silhouette samples per tick.
