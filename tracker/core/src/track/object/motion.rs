@@ -93,11 +93,7 @@ pub(super) fn record_estimate(
             config.motion.max_speed,
         );
     }
-    // The first pose's own tick corrects the given pose; that is no motion. A plain average weighs it as one
-    // tick's measurement; corrected for its start, it would set the velocity outright.
-    let corrects_first_pose =
-        config.motion.velocity_start_corrected && inputs.t_us <= state.first_us;
-    if inputs.inner || corrects_first_pose {
+    if inputs.inner {
         // Steps between ticks measure no velocity (see `TickInputs::velocity_since_us`).
     } else if span > 0.0 && state.tracking != TrackingState::Lost {
         let measured = model.observable_motion(&reference, &pose, span);
@@ -252,69 +248,6 @@ mod tests {
         // A re-detection forgets both anchors.
         track.relocate(at(0.1, 0.0));
         assert!(anchored_extrapolation(&model, &track, 66_666, &config).is_none());
-    }
-
-    /// `record_estimate` at `t_us` (a tick, one nominal period after the last), without depth frame.
-    fn record_at(
-        model: &ObjectModel,
-        state: &mut ObjectState,
-        t_us: i64,
-        pose: Isometry3<f64>,
-        config: &TrackerConfig,
-    ) {
-        use crate::recon::{DepthRig, EventSurface, IntensityFilterConfig};
-        use scene::geometry::PinholeCamera;
-        let camera = PinholeCamera::new(100.0, 100.0, 49.5, 39.5, 100, 80).unwrap();
-        let rig = DepthRig {
-            camera,
-            event_from_depth: Isometry3::identity(),
-        };
-        let surface = EventSurface::new(100, 80, IntensityFilterConfig::default());
-        let inputs = TickInputs {
-            span: 1.0,
-            t_us,
-            dt_s: 1.0 / 120.0,
-            inner: false,
-            velocity_since_us: None,
-            depth: None,
-            depth_exposed_us: t_us,
-            surface: &surface,
-            camera: &camera,
-            depth_rig: &rig,
-        };
-        record_estimate(model, state, &inputs, pose, false, config);
-    }
-
-    #[test]
-    fn the_first_poses_own_tick_measures_no_velocity_when_the_start_is_corrected() {
-        let half = Vector3::new(0.05, 0.05, 0.05);
-        let model = ObjectModel::new(1, 0.1, -half, half, &[]);
-        let at = |x: f64| Isometry3::translation(x, 0.0, 0.6);
-        // The first pose's tick moves the given pose by 2 mm: a correction, not 0.24 m/s.
-        let config = TrackerConfig::default();
-        assert!(config.motion.velocity_start_corrected);
-        let mut state = ObjectState::new(at(0.0), 1_000, 0);
-        record_at(&model, &mut state, 1_000, at(0.002), &config);
-        assert_eq!(state.velocity, Vector6::zeros());
-        assert_eq!(state.velocity_weight, 0.0);
-        // The next tick's motion is the first measurement, and sets the velocity outright.
-        record_at(&model, &mut state, 9_333, at(0.004), &config);
-        assert!(
-            (state.velocity[0] - 0.24).abs() < 1e-9,
-            "{}",
-            state.velocity
-        );
-        // A plain average takes the correction as a tick's motion, at its weight.
-        let mut plain = config.clone();
-        plain.motion.velocity_start_corrected = false;
-        let mut state = ObjectState::new(at(0.0), 1_000, 0);
-        record_at(&model, &mut state, 1_000, at(0.002), &plain);
-        let a = plain.motion.velocity_smoothing;
-        assert!(
-            (state.velocity[0] - a * 0.24).abs() < 1e-9,
-            "{}",
-            state.velocity
-        );
     }
 
     #[test]
