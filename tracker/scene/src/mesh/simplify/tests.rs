@@ -486,9 +486,11 @@ proptest! {
 
     /// Random bumpy height fields (an open surface with a rim): the result is a valid mesh with no more
     /// triangles, every input vertex and triangle centre lies within the tolerance of it, and its surface stays
-    /// within twice the tolerance of the input's both ways (at most 1.4 times in runs of this test).
+    /// within 2.5 times the tolerance of the input's both ways. The simplifier checks the vertices and triangle
+    /// centres only, so a surface point between them can be farther: 2.01 times at most in 20,000 generated
+    /// cases (`PROPTEST_CASES=20000`; the regressions file keeps that case), usually under 1.4.
     #[test]
-    fn bumpy_surfaces_stay_within_twice_the_tolerance(
+    fn bumpy_surfaces_stay_within_two_and_a_half_tolerances(
         heights in prop::collection::vec(-2e-3f32..2e-3, 121),
         tolerance in 5e-5f64..1e-3,
     ) {
@@ -499,7 +501,7 @@ proptest! {
         let checked = checked_deviation(&field, &simple);
         prop_assert!(checked <= tolerance * (1.0 + 1e-9), "{} m at tolerance {} m", checked, tolerance);
         let d = deviation(&field, &simple, 300);
-        prop_assert!(d <= 2.0 * tolerance, "deviation {} m at tolerance {} m", d, tolerance);
+        prop_assert!(d <= 2.5 * tolerance, "deviation {} m at tolerance {} m", d, tolerance);
     }
 
     /// Any triangle soup (shared, repeated, non-manifold or degenerate triangles, as a broken export has) is
