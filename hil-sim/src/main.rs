@@ -81,13 +81,15 @@ enum Command {
     /// 3 s each). `holdout`: the same shape with other seeds and each object under other motion-speed pairs, to
     /// check a change tuned on `dev`. `smoke`: two 1 s sequences. `multi`: 12 scenes of two objects that hide each
     /// other, 2-3 s each. `fast`: 36 sequences of 3 s at fast speed, the library objects twice on new seeds and
-    /// pairings (groups dev-like and holdout-like) and 12 novel objects (group novel, named novel_*). Writes DIR/<sequence>/ and DIR/suite.json. Each sequence has its own seed, so the
+    /// pairings (groups dev-like and holdout-like) and 12 novel objects (group novel, named novel_*). `fast-check`:
+    /// the shape of `fast` on seeds, pairings and novel shapes no other suite has, to check a result tuned on `fast`.
+    /// Writes DIR/<sequence>/ and DIR/suite.json. Each sequence has its own seed, so the
     /// recordings do not depend on --jobs. Progress lines name each sequence as it finishes; after a failure no
     /// further sequence is started and the first error is reported. Suite contents and generation times:
     /// docs/simulator.md.
     Suite {
-        /// Suite name: dev, holdout (dev's shape, other seeds and pairings), smoke, multi (two objects per scene) or
-        /// fast (fast motion only, library and novel objects).
+        /// Suite name: dev, holdout (dev's shape, other seeds and pairings), smoke, multi (two objects per scene),
+        /// fast (fast motion only, library and novel objects) or fast-check (fast's shape on other seeds and shapes).
         #[arg(long, default_value = "dev", value_parser = PossibleValuesParser::new(hil_sim::suite::SUITES))]
         name: String,
         /// Output directory: one recording directory per sequence, and suite.json.

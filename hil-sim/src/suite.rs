@@ -24,11 +24,14 @@ pub struct SuiteEntry {
 }
 
 /// Names of the suites [`suite`] knows.
-pub const SUITES: [&str; 5] = ["dev", "holdout", "smoke", "multi", "fast"];
+pub const SUITES: [&str; 6] = ["dev", "holdout", "smoke", "multi", "fast", "fast-check"];
 
 /// Seeds of the `fast` suite: its dev-like library round, holdout-like library round and novel objects start here
 /// (dev uses 1000 on, holdout 3000 on).
 const FAST_SEEDS: [u64; 3] = [5000, 6000, 7000];
+
+/// Seeds of the `fast-check` suite, the same three groups as `fast` on seeds no other suite uses.
+const FAST_CHECK_SEEDS: [u64; 3] = [8000, 9000, 10000];
 
 /// Novel objects in the `fast` suite (each family twice).
 const FAST_NOVEL: usize = 12;
@@ -177,47 +180,62 @@ pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
                 .collect();
             Some(out)
         }
-        "fast" => {
-            let speed = SpeedLevel::Fast;
-            let mut out = Vec::new();
-            for (group, rotate, first_seed) in [
-                ("dev-like", 0, FAST_SEEDS[0]),
-                ("holdout-like", 3, FAST_SEEDS[1]),
-            ] {
-                for (i, kind) in ObjectKind::ALL.into_iter().enumerate() {
-                    let motion = MotionProfile::ALL[(i + rotate) % MotionProfile::ALL.len()];
-                    let mut e = entry(kind, motion, speed, 3.0, first_seed + i as u64);
-                    e.group = Some(group);
-                    out.push(e);
-                }
-            }
-            for k in 0..FAST_NOVEL {
-                let seed = FAST_SEEDS[2] + k as u64;
-                let family = NovelFamily::for_seed(seed);
-                // The second round turns each family's profile on by two.
-                let n = MotionProfile::ALL.len();
-                let motion = MotionProfile::ALL[(k + 2 * (k / n)) % n];
-                out.push(SuiteEntry {
-                    name: format!(
-                        "{}-{}-{}",
-                        novel_name(family, seed),
-                        motion.name(),
-                        speed.name()
-                    ),
-                    config: GenerateConfig::new(
-                        ObjectSource::Novel { family, seed },
-                        motion,
-                        speed,
-                        3.0,
-                        seed,
-                    ),
-                    group: Some("novel"),
-                });
-            }
-            Some(out)
-        }
+        "fast" => Some(fast_suite(FAST_SEEDS, [0, 3], 0)),
+        "fast-check" => Some(fast_suite(FAST_CHECK_SEEDS, [2, 5], 1)),
         _ => None,
     }
+}
+
+/// A fast-motion suite of 36 sequences of 3 s: the 12 library objects twice (groups `dev-like` on seeds from
+/// `seeds[0]`, object `i` under profile `i + turns[0]`, and `holdout-like` on seeds from `seeds[1]` under profile
+/// `i + turns[1]`), then 12 novel objects on seeds from `seeds[2]` (group `novel`, each family twice under two
+/// profiles two apart, turned on by `novel_turn`).
+fn fast_suite(seeds: [u64; 3], turns: [usize; 2], novel_turn: usize) -> Vec<SuiteEntry> {
+    let speed = SpeedLevel::Fast;
+    let n = MotionProfile::ALL.len();
+    let mut out = Vec::new();
+    for (group, rotate, first_seed) in [
+        ("dev-like", turns[0], seeds[0]),
+        ("holdout-like", turns[1], seeds[1]),
+    ] {
+        for (i, kind) in ObjectKind::ALL.into_iter().enumerate() {
+            let motion = MotionProfile::ALL[(i + rotate) % n];
+            out.push(SuiteEntry {
+                name: format!("{}-{}-{}", kind.name(), motion.name(), speed.name()),
+                config: GenerateConfig::new(
+                    ObjectSource::Library(kind),
+                    motion,
+                    speed,
+                    3.0,
+                    first_seed + i as u64,
+                ),
+                group: Some(group),
+            });
+        }
+    }
+    for k in 0..FAST_NOVEL {
+        let seed = seeds[2] + k as u64;
+        let family = NovelFamily::for_seed(seed);
+        // The second round turns each family's profile on by two.
+        let motion = MotionProfile::ALL[(k + 2 * (k / n) + novel_turn) % n];
+        out.push(SuiteEntry {
+            name: format!(
+                "{}-{}-{}",
+                novel_name(family, seed),
+                motion.name(),
+                speed.name()
+            ),
+            config: GenerateConfig::new(
+                ObjectSource::Novel { family, seed },
+                motion,
+                speed,
+                3.0,
+                seed,
+            ),
+            group: Some("novel"),
+        });
+    }
+    out
 }
 
 /// Whether `dir` already holds a complete recording generated from `config` by this generator version.
@@ -405,7 +423,35 @@ mod tests {
 
     #[test]
     fn fast_suite_is_fast_library_and_novel_objects_on_new_seeds_and_pairings() {
+        fast_suite_checks(&suite("fast").unwrap(), &[]);
+    }
+
+    #[test]
+    fn fast_check_suite_is_a_fast_suite_on_seeds_and_objects_no_other_suite_has() {
         let fast = suite("fast").unwrap();
+        let check = suite("fast-check").unwrap();
+        fast_suite_checks(&check, &fast);
+        // Its novel objects are other shapes than `fast`'s (their seeds make the shape).
+        let novel_names = |s: &[SuiteEntry]| -> Vec<String> {
+            s.iter()
+                .filter(|e| e.group == Some("novel"))
+                .map(|e| e.config.object.object_name().unwrap())
+                .collect()
+        };
+        let fast_novel = novel_names(&fast);
+        assert!(novel_names(&check).iter().all(|n| !fast_novel.contains(n)));
+        // And its library objects meet other profiles than in `fast`.
+        for e in check.iter().filter(|e| e.group != Some("novel")) {
+            let same = fast
+                .iter()
+                .find(|f| f.group == e.group && f.config.object == e.config.object)
+                .unwrap();
+            assert_ne!(same.config.motion, e.config.motion, "{}", e.name);
+        }
+    }
+
+    /// The checks every fast suite passes; `others` are further suites whose seeds it must not reuse.
+    fn fast_suite_checks(fast: &[SuiteEntry], others: &[SuiteEntry]) {
         let (dev, holdout) = (suite("dev").unwrap(), suite("holdout").unwrap());
         assert!(fast.len() >= 36, "{}", fast.len());
         let mut names: Vec<_> = fast.iter().map(|e| &e.name).collect();
@@ -416,15 +462,16 @@ mod tests {
         seeds.sort_unstable();
         seeds.dedup();
         assert_eq!(seeds.len(), fast.len(), "seeds differ");
-        for e in &fast {
+        for e in fast {
             assert_eq!(e.config.speed, SpeedLevel::Fast, "{}", e.name);
             assert_eq!(e.config.seconds, 3.0, "{}", e.name);
             assert!(e.config.companions.is_empty(), "{}", e.name);
             assert!(
                 dev.iter()
                     .chain(&holdout)
+                    .chain(others)
                     .all(|d| d.config.seed != e.config.seed),
-                "{}: seed used by dev or holdout",
+                "{}: seed used by another suite",
                 e.name
             );
             let novel = matches!(e.config.object, ObjectSource::Novel { .. });
