@@ -48,15 +48,7 @@ const FAST_NOVEL: usize = 12;
 /// then 12 novel objects (group `novel`, `novel:7000` to `novel:7011`, each shape family twice under two profiles,
 /// each profile twice), for checking fast motion on seeds and shapes nothing was tuned on.
 pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
-    let entry = |kind: ObjectKind,
-                 motion: MotionProfile,
-                 speed: SpeedLevel,
-                 seconds: f64,
-                 seed: u64| SuiteEntry {
-        name: format!("{}-{}-{}", kind.name(), motion.name(), speed.name()),
-        config: GenerateConfig::new(ObjectSource::Library(kind), motion, speed, seconds, seed),
-        group: None,
-    };
+    let entry = library_entry;
     match name {
         "dev" | "holdout" => {
             let (rotate, first_seed) = if name == "dev" { (0, 1000) } else { (3, 3000) };
@@ -186,6 +178,21 @@ pub fn suite(name: &str) -> Option<Vec<SuiteEntry>> {
     }
 }
 
+/// The sequence `<object>-<motion>-<speed>` of library object `kind`, in no group.
+fn library_entry(
+    kind: ObjectKind,
+    motion: MotionProfile,
+    speed: SpeedLevel,
+    seconds: f64,
+    seed: u64,
+) -> SuiteEntry {
+    SuiteEntry {
+        name: format!("{}-{}-{}", kind.name(), motion.name(), speed.name()),
+        config: GenerateConfig::new(ObjectSource::Library(kind), motion, speed, seconds, seed),
+        group: None,
+    }
+}
+
 /// A fast-motion suite of 36 sequences of 3 s: the 12 library objects twice (groups `dev-like` on seeds from
 /// `seeds[0]`, object `i` under profile `i + turns[0]`, and `holdout-like` on seeds from `seeds[1]` under profile
 /// `i + turns[1]`), then 12 novel objects on seeds from `seeds[2]` (group `novel`, each family twice under two
@@ -201,15 +208,8 @@ fn fast_suite(seeds: [u64; 3], turns: [usize; 2], novel_turn: usize) -> Vec<Suit
         for (i, kind) in ObjectKind::ALL.into_iter().enumerate() {
             let motion = MotionProfile::ALL[(i + rotate) % n];
             out.push(SuiteEntry {
-                name: format!("{}-{}-{}", kind.name(), motion.name(), speed.name()),
-                config: GenerateConfig::new(
-                    ObjectSource::Library(kind),
-                    motion,
-                    speed,
-                    3.0,
-                    first_seed + i as u64,
-                ),
                 group: Some(group),
+                ..library_entry(kind, motion, speed, 3.0, first_seed + i as u64)
             });
         }
     }
