@@ -13,6 +13,7 @@ mod bop;
 mod frame;
 mod kdtree;
 mod overlay;
+pub mod paired;
 pub mod plot;
 mod pose_error;
 pub mod quality_report;

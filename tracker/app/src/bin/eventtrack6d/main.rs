@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod compare;
 mod convert;
 mod demo;
 mod demo_sequence;
@@ -33,6 +34,7 @@ enum Command {
     Run(run::RunArgs),
     Track(track::TrackArgs),
     Bench(bench::BenchArgs),
+    Compare(compare::CompareArgs),
     Eval(evaluate::EvalArgs),
     Inspect(inspect::InspectArgs),
     Convert(convert::ConvertArgs),
@@ -62,6 +64,7 @@ fn main() -> ExitCode {
         Command::Ros2Config(args) => ros2_config::run(&args),
         Command::Eval(args) => evaluate::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Compare(args) => compare::run(&args),
         Command::Run(args) => run::run(&args),
         Command::Demo(args) => demo::run(&args),
         Command::Track(args) => track::run(&args),
