@@ -18,10 +18,14 @@ pub struct PairedScore {
     pub sequence: String,
     /// Motion profile (`-` where the results do not say).
     pub motion: String,
-    /// Score in the base run, percent.
+    /// Score in the base runs, percent (the mean where several runs of the suite are given).
     pub base: f64,
-    /// Score in the candidate run, percent.
+    /// Score in the candidate runs, percent (likewise).
     pub candidate: f64,
+    /// Base runs the score is the mean of.
+    pub base_runs: usize,
+    /// Candidate runs the score is the mean of.
+    pub candidate_runs: usize,
 }
 
 impl PairedScore {
@@ -83,13 +87,11 @@ pub enum PairingError {
         /// The sequence.
         sequence: String,
     },
-    /// The same suite's sequence appears twice on one side.
-    #[error("sequence `{sequence}` of suite `{suite}` is given twice as {side}")]
+    /// The same run is given twice on one side.
+    #[error("{file} is given twice as {side}")]
     Duplicate {
-        /// The suite.
-        suite: String,
-        /// The sequence.
-        sequence: String,
+        /// The file.
+        file: String,
         /// `base` or `candidate`.
         side: &'static str,
     },
@@ -113,11 +115,18 @@ pub struct RunSide<'a> {
     pub method: &'a str,
 }
 
-type Scores = BTreeMap<(String, String), (String, f64)>;
+/// Per `(suite, sequence)`: motion profile, sum of the runs' scores, runs.
+type Scores = BTreeMap<(String, String), (String, f64, usize)>;
 
 fn side_scores(side: &RunSide<'_>, label: &'static str) -> Result<Scores, PairingError> {
     let mut scores = Scores::new();
-    for (file, doc) in side.runs {
+    for (k, (file, doc)) in side.runs.iter().enumerate() {
+        if side.runs[..k].iter().any(|(other, _)| other == file) {
+            return Err(PairingError::Duplicate {
+                file: file.clone(),
+                side: label,
+            });
+        }
         let not_results = |why: &str| PairingError::NotResults(file.clone(), why.to_string());
         let suite = doc
             .get("suite")
@@ -152,14 +161,11 @@ fn side_scores(side: &RunSide<'_>, label: &'static str) -> Result<Scores, Pairin
                 .and_then(Value::as_str)
                 .unwrap_or("-")
                 .to_string();
-            let key = (suite.to_string(), name.clone());
-            if scores.insert(key, (motion, score)).is_some() {
-                return Err(PairingError::Duplicate {
-                    suite: suite.to_string(),
-                    sequence: name.clone(),
-                    side: label,
-                });
-            }
+            let entry = scores
+                .entry((suite.to_string(), name.clone()))
+                .or_insert((motion, 0.0, 0));
+            entry.1 += score;
+            entry.2 += 1;
         }
     }
     Ok(scores)
@@ -181,7 +187,8 @@ fn listed(keys: &[&(String, String)]) -> String {
     }
 }
 
-/// Pairs the sequences of the base runs with those of the candidate runs by suite and sequence name. Every
+/// Pairs the sequences of the base runs with those of the candidate runs by suite and sequence name; where a side
+/// has several runs of a suite (twins: the same parameters nudged), a sequence's score there is their mean. Every
 /// sequence must be in both: a comparison over different sequences says nothing about the change.
 pub fn pair_results(
     base: &RunSide<'_>,
@@ -198,14 +205,16 @@ pub fn pair_results(
         });
     }
     Ok(b.into_iter()
-        .map(|((suite, sequence), (motion, base))| {
-            let candidate = c[&(suite.clone(), sequence.clone())].1;
+        .map(|((suite, sequence), (motion, base_sum, base_runs))| {
+            let (_, candidate_sum, candidate_runs) = c[&(suite.clone(), sequence.clone())];
             PairedScore {
                 suite,
                 sequence,
                 motion,
-                base,
-                candidate,
+                base: base_sum / base_runs as f64,
+                candidate: candidate_sum / candidate_runs as f64,
+                base_runs,
+                candidate_runs,
             }
         })
         .collect())
@@ -291,13 +300,27 @@ pub fn comparison_markdown(
     for (motion, set) in &motions {
         rows.extend(summarise_pairs(&format!("motion {motion}"), set, options));
     }
+    let runs = |f: fn(&PairedScore) -> usize| {
+        let lo = pairs.iter().map(f).min().unwrap_or(0);
+        let hi = pairs.iter().map(f).max().unwrap_or(0);
+        if lo == hi {
+            format!("{lo}")
+        } else {
+            format!("{lo} to {hi}")
+        }
+    };
     let mut s = format!(
-        "# Paired comparison\n\nADD-S AUC per sequence (120 Hz, percent), mean over sequences; difference = candidate - base, \
+        "# Paired comparison\n\nADD-S AUC per sequence (120 Hz, percent), mean over sequences; a side's score of a sequence \
+         is the mean of its runs of it (base: {} runs, candidate: {}). Difference = candidate - base, \
          with its 95 % bootstrap interval ({} resamples of the sequences, seed {}). Raised / lowered: sequences moved by \
          more than {} points. A difference whose interval spans 0 is within what the draw of sequences explains. Judge a change \
-         on the first row: the rows below it are smaller sets, and among several of them one may exclude 0 by chance.\n\n\
+         on the first row: the rows below it are smaller sets, and among several of them one may exclude 0 by chance. \
+         Against a single run of tuned defaults every change looks worse (they were kept for their luck): give each side \
+         twins, runs with a parameter nudged by 1 %.\n\n\
          | set | sequences | base | candidate | difference | 95 % interval | beyond chance | raised | lowered |\n\
          | --- | ---: | ---: | ---: | ---: | --- | --- | ---: | ---: |\n",
+        runs(|p| p.base_runs),
+        runs(|p| p.candidate_runs),
         options.resamples.max(1),
         options.seed,
         options.moved
@@ -424,6 +447,45 @@ mod tests {
     }
 
     #[test]
+    fn twins_on_a_side_count_by_their_mean() {
+        let base = [
+            (
+                "a".to_string(),
+                run("s", "eventtrack6d", &[("x", 10.0), ("y", 50.0)]),
+            ),
+            (
+                "a+".to_string(),
+                run("s", "eventtrack6d", &[("x", 30.0), ("y", 50.0)]),
+            ),
+            (
+                "a-".to_string(),
+                run("s", "eventtrack6d", &[("x", 20.0), ("y", 80.0)]),
+            ),
+        ];
+        let cand = [(
+            "b".to_string(),
+            run("s", "eventtrack6d", &[("x", 25.0), ("y", 60.0)]),
+        )];
+        let pairs = pair_results(&side(&base), &side(&cand)).unwrap();
+        let got: Vec<_> = pairs
+            .iter()
+            .map(|p| {
+                (
+                    p.sequence.as_str(),
+                    p.base,
+                    p.candidate,
+                    p.base_runs,
+                    p.candidate_runs,
+                )
+            })
+            .collect();
+        assert_eq!(got, vec![("x", 20.0, 25.0, 3, 1), ("y", 60.0, 60.0, 3, 1)]);
+        let md = comparison_markdown(&pairs, &PairedOptions::default(), 2);
+        assert!(md.contains("(base: 3 runs, candidate: 1)"), "{md}");
+        assert!(md.contains("| all | 2 | 40.0 | 42.5 | +2.5 |"), "{md}");
+    }
+
+    #[test]
     fn runs_of_several_suites_pair_by_suite_and_sequence() {
         let base = [
             ("a".to_string(), run("fast", "eventtrack6d", &[("x", 10.0)])),
@@ -480,10 +542,7 @@ mod tests {
         );
         let twice = [base[0].clone(), base[0].clone()];
         let e = pair_results(&side(&twice), &side(&cand)).unwrap_err();
-        assert!(
-            matches!(e, PairingError::Duplicate { side: "base", .. }),
-            "{e}"
-        );
+        assert_eq!(e.to_string(), "a is given twice as base");
         let bad = [(
             "c".to_string(),
             json!({"suite": "s", "methods": {"eventtrack6d": {"sequences": {"x": {"add_s": "high"}}}}}),
@@ -546,6 +605,7 @@ mod tests {
             let make = |shift: f64| -> Vec<PairedScore> {
                 scores.iter().enumerate().map(|(i, (b, k))| PairedScore {
                     suite: "s".into(), sequence: format!("q{i}"), motion: "-".into(), base: *b, candidate: k + shift,
+                    base_runs: 1, candidate_runs: 1,
                 }).collect()
             };
             let options = PairedOptions { resamples: 300, ..PairedOptions::default() };

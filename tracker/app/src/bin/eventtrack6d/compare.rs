@@ -15,8 +15,10 @@ use std::path::{Path, PathBuf};
 /// (the sequences resampled with replacement; fixed seed, so the same runs give the same interval), whether the
 /// interval excludes 0, and how many sequences moved by more than --moved points; for all sequences, per suite and
 /// per motion profile; then the sequences that moved most each way. Give several runs per side to pool suites (e.g.
-/// `fast` and `fast-check`). Both sides must hold the same sequences; a missing or duplicated sequence, a missing
-/// method or a file that is not a bench's results.json is an error naming it. The statistics: docs/evaluation.md.
+/// `fast` and `fast-check`), and several runs of one suite (twins: the same parameters with one nudged by 1 %) to
+/// score each sequence by their mean: tuned defaults' own run is luckier than their neighbourhood, so compare with
+/// twins. Both sides must hold the same sequences; a sequence on one side only, a run given twice, a missing method
+/// or a file that is not a bench's results.json is an error naming it. The statistics: docs/evaluation.md.
 #[derive(Debug, Args)]
 pub struct CompareArgs {
     /// A base run: a bench output directory or its results.json (repeat for several suites).
