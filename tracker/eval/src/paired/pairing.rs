@@ -213,7 +213,10 @@ mod tests {
             .collect();
         assert_eq!(got, vec![("x", 20.0, 25.0, 3, 1), ("y", 60.0, 60.0, 3, 1)]);
         let md = comparison_markdown(&pairs, &PairedOptions::default(), 2);
-        assert!(md.contains("(base: 3 runs, candidate: 1)"), "{md}");
+        assert!(
+            md.contains("(runs per sequence: base 3, candidate 1)"),
+            "{md}"
+        );
         assert!(md.contains("| all | 2 | 40.0 | 42.5 | +2.5 |"), "{md}");
     }
 

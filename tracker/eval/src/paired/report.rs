@@ -11,6 +11,28 @@ pub fn comparison_markdown(
     options: &PairedOptions,
     movers: usize,
 ) -> String {
+    let mut s = header(pairs, options);
+    for r in &summary_rows(pairs, options) {
+        s.push_str(&format!(
+            "| {} | {} | {:.1} | {:.1} | {:+.1} | {:+.1} to {:+.1} | {} | {} | {} |\n",
+            r.label,
+            r.pairs,
+            r.base_mean,
+            r.candidate_mean,
+            r.mean_difference,
+            r.interval.0,
+            r.interval.1,
+            if r.is_beyond_chance() { "yes" } else { "no" },
+            r.raised,
+            r.lowered
+        ));
+    }
+    s.push_str(&movers_markdown(pairs, movers));
+    s
+}
+
+/// The summary of all pairs, then of each suite (when there are several), then of each motion profile.
+fn summary_rows(pairs: &[PairedScore], options: &PairedOptions) -> Vec<PairedSummary> {
     let mut rows: Vec<PairedSummary> = Vec::new();
     let all: Vec<&PairedScore> = pairs.iter().collect();
     rows.extend(summarise_pairs("all", &all, options));
@@ -28,6 +50,11 @@ pub fn comparison_markdown(
     for (motion, set) in &motions {
         rows.extend(summarise_pairs(&format!("motion {motion}"), set, options));
     }
+    rows
+}
+
+/// The title, what the table says, and the table's head.
+fn header(pairs: &[PairedScore], options: &PairedOptions) -> String {
     let runs = |f: fn(&PairedScore) -> usize| {
         let lo = pairs.iter().map(f).min().unwrap_or(0);
         let hi = pairs.iter().map(f).max().unwrap_or(0);
@@ -37,9 +64,9 @@ pub fn comparison_markdown(
             format!("{lo} to {hi}")
         }
     };
-    let mut s = format!(
+    format!(
         "# Paired comparison\n\nADD-S AUC per sequence (120 Hz, percent), mean over sequences; a side's score of a sequence \
-         is the mean of its runs of it (base: {} runs, candidate: {}). Difference = candidate - base, \
+         is the mean of its runs of it (runs per sequence: base {}, candidate {}). Difference = candidate - base, \
          with its 95 % bootstrap interval ({} resamples of the sequences, seed {}). Raised / lowered: sequences moved by \
          more than {} points. A difference whose interval spans 0 is within what the draw of sequences explains. Judge a change \
          on the first row: the rows below it are smaller sets, and among several of them one may exclude 0 by chance. \
@@ -52,22 +79,12 @@ pub fn comparison_markdown(
         options.resamples.max(1),
         options.seed,
         options.moved
-    );
-    for r in &rows {
-        s.push_str(&format!(
-            "| {} | {} | {:.1} | {:.1} | {:+.1} | {:+.1} to {:+.1} | {} | {} | {} |\n",
-            r.label,
-            r.pairs,
-            r.base_mean,
-            r.candidate_mean,
-            r.mean_difference,
-            r.interval.0,
-            r.interval.1,
-            if r.is_beyond_chance() { "yes" } else { "no" },
-            r.raised,
-            r.lowered
-        ));
-    }
+    )
+}
+
+/// The sequences the candidate raised most and lowered most, at most `movers` each.
+fn movers_markdown(pairs: &[PairedScore], movers: usize) -> String {
+    let mut s = String::new();
     let mut sorted: Vec<&PairedScore> = pairs.iter().collect();
     sorted.sort_by(|a, b| b.difference().total_cmp(&a.difference()));
     let mut list = |title: &str, items: Vec<&&PairedScore>| {
