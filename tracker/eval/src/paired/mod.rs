@@ -17,7 +17,16 @@ pub use summary::{PairedOptions, PairedSummary, summarise_pairs};
 /// Bench `results.json` documents for the tests: one suite, one method, the given scores.
 #[cfg(test)]
 pub(crate) mod test_runs {
+    use super::RunSide;
     use serde_json::{Value, json};
+
+    /// The runs as a side comparing method `eventtrack6d`.
+    pub fn side(runs: &[(String, Value)]) -> RunSide<'_> {
+        RunSide {
+            runs,
+            method: "eventtrack6d",
+        }
+    }
 
     /// A results.json of `suite` whose `method` scored `scores` (sequence, ADD-S), motion `shake`.
     pub fn run(suite: &str, method: &str, scores: &[(&str, f64)]) -> Value {

@@ -167,16 +167,9 @@ mod tests {
     use super::*;
     use crate::paired::report::comparison_markdown;
     use crate::paired::summary::PairedOptions;
-    use crate::paired::test_runs::run;
+    use crate::paired::test_runs::{run, side};
     use proptest::prelude::*;
     use serde_json::json;
-
-    fn side(runs: &[(String, Value)]) -> RunSide<'_> {
-        RunSide {
-            runs,
-            method: "eventtrack6d",
-        }
-    }
 
     #[test]
     fn twins_on_a_side_count_by_their_mean() {

@@ -122,15 +122,8 @@ fn movers_markdown(pairs: &[PairedScore], movers: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::paired::pairing::{RunSide, pair_results};
-    use crate::paired::test_runs::run;
-
-    fn side(runs: &[(String, serde_json::Value)]) -> RunSide<'_> {
-        RunSide {
-            runs,
-            method: "eventtrack6d",
-        }
-    }
+    use crate::paired::pairing::pair_results;
+    use crate::paired::test_runs::{run, side};
 
     #[test]
     fn large_swings_both_ways_are_not_beyond_chance() {

@@ -91,16 +91,9 @@ pub fn summarise_pairs(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::paired::pairing::{RunSide, pair_results};
-    use crate::paired::test_runs::run;
+    use crate::paired::pairing::pair_results;
+    use crate::paired::test_runs::{run, side};
     use proptest::prelude::*;
-
-    fn side(runs: &[(String, serde_json::Value)]) -> RunSide<'_> {
-        RunSide {
-            runs,
-            method: "eventtrack6d",
-        }
-    }
 
     #[test]
     fn a_constant_shift_has_an_interval_of_exactly_the_shift() {
