@@ -4,7 +4,8 @@
 //! is the CPU time of every thread of the process (the tracker's and the `render-ahead` thread) over consecutive
 //! periods of the recording, replayed from its first pose again when it ends (the new tracker is not timed).
 //! `defaults`: steps between ticks; `ticks_only`: one refinement per tick, as `config/tracker/ticks-only.toml`
-//! sets it.
+//! sets it. A second group times the depth-frame periods of a mug being searched for, with and without the
+//! whole-pose search.
 
 // `criterion_group!` defines undocumented public functions.
 #![allow(missing_docs)]
@@ -113,5 +114,74 @@ fn fast_periods(c: &mut Criterion) {
     bench_periods(c, "ticks_only", &rec, &mut periods, &ticks_only());
 }
 
-criterion_group!(benches, fast_periods);
+/// The CPU of the depth-exposure periods while the mug is searched for: the tracker is re-seeded 15 cm
+/// beside the mug and turned 120 degrees at the first tick, so every depth frame plans a re-detection search (and
+/// checks its first places) until it is found; every 24 periods it is re-seeded again. Only the periods with a
+/// depth frame are timed (the others are replayed untimed). `pose_search`: the defaults; `no_pose_search`:
+/// `pose_search_views = 0`.
+fn search_periods(c: &mut Criterion) {
+    let dir = std::env::temp_dir().join("eventtrack6d-fast-period-bench");
+    let rec = fast_mug_recording(&dir, 0.8);
+    let mut periods = periods(&rec);
+    let gt = rec.ground_truth.clone().expect("ground truth");
+    let truth = tracker::recording::PoseTrack::from_samples(&gt, "mug");
+    for (label, views) in [("pose_search", None), ("no_pose_search", Some(0))] {
+        let mut config = TrackerConfig::default();
+        if let Some(v) = views {
+            config.redetect.pose_search_views = v;
+        }
+        let fresh = || -> EventTrack6d {
+            let (mut t, first_us) =
+                mug_tracker(&rec, config.clone(), Box::new(CpuRenderer::new()), 1);
+            let pose = truth.interpolated_at(first_us).expect("first pose");
+            let turn = nalgebra::UnitQuaternion::from_axis_angle(
+                &nalgebra::Vector3::x_axis(),
+                120f64.to_radians(),
+            );
+            let lost = nalgebra::Isometry3::from_parts(
+                nalgebra::Translation3::from(
+                    pose.translation.vector + nalgebra::Vector3::new(0.15, 0.0, 0.0),
+                ),
+                turn * pose.rotation,
+            );
+            t.reseed(0, first_us, lost).expect("re-seed");
+            t
+        };
+        let mut tracker = fresh();
+        let mut next = 0;
+        let mut out = Vec::with_capacity(4);
+        let mut spare = periods[0].depth.clone();
+        c.bench_function(&format!("cpu_of_search_depth_period_{label}_160"), |b| {
+            b.iter_custom(|iters| {
+                let mut total = 0;
+                let mut timed = 0;
+                while timed < iters {
+                    if next == periods.len().min(24) {
+                        tracker = fresh();
+                        next = 0;
+                    }
+                    let p = &mut periods[next];
+                    let depth = next > 0 && p.depth.is_some();
+                    let start = process_cpu_ns();
+                    tracker.push_events(&p.events);
+                    if let (Some(frame), Some(spare)) = (p.depth.as_ref(), spare.as_mut()) {
+                        spare.clone_from(frame);
+                        tracker.push_depth(p.tick.t_us, spare, DepthHandling::Now);
+                    }
+                    out.clear();
+                    tracker.tick(&p.tick, &mut out);
+                    tracker.prepare_next_tick();
+                    if depth {
+                        total += process_cpu_ns().saturating_sub(start);
+                        timed += 1;
+                    }
+                    next += 1;
+                }
+                Duration::from_nanos(total)
+            })
+        });
+    }
+}
+
+criterion_group!(benches, fast_periods, search_periods);
 criterion_main!(benches);

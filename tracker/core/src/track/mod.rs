@@ -14,6 +14,7 @@ mod eventtrack;
 mod fallback_check;
 mod hold;
 mod object;
+mod pose_search;
 mod redetect;
 mod validate;
 

@@ -40,6 +40,18 @@ pub struct RedetectConfig {
     /// planned on. A tick's places are checked in parallel on the object threads. `depth30`, which refines only
     /// at depth frames, checks all at once.
     pub places_per_tick: usize,
+    /// Whole-pose search: directions the object is tried seen from (spread evenly over the sphere), at the
+    /// estimate's place and at every cluster, each in [`Self::pose_search_rolls`] turns about the line of sight;
+    /// each orientation is scored by how much of its visible surface (150 points sampled on the mesh) the depth
+    /// confirms. 0 turns the search off: a place is then tried only in the estimated orientation and with its
+    /// longest axis along the cluster's.
+    pub pose_search_views: usize,
+    /// Turns about the line of sight tried per direction of [`Self::pose_search_views`].
+    pub pose_search_rolls: usize,
+    /// The best poses of the whole-pose search checked as places (refined on depth and scored as any place),
+    /// besides the estimate's place and each cluster's own two. A search that does not fit in the ticks before the
+    /// next depth frame (`places_per_tick` per tick) is dropped unfinished and its places counted.
+    pub pose_search_places: usize,
 }
 
 impl Default for RedetectConfig {
@@ -54,6 +66,9 @@ impl Default for RedetectConfig {
             margin: 0.05,
             min_score: 0.15,
             places_per_tick: 2,
+            pose_search_views: 24,
+            pose_search_rolls: 6,
+            pose_search_places: 2,
         }
     }
 }
@@ -123,6 +138,20 @@ impl DepthBackground {
                 }
             }
         }
+    }
+
+    /// Whether the depth pixel `(u, v)` lies in a cell that the latest [`Self::foreground`] found in front of the
+    /// background; `false` outside the image.
+    pub fn in_front(&self, u: usize, v: usize) -> bool {
+        let cell_px = self.cell_px as usize;
+        let (cu, cv) = (u / cell_px, v / cell_px);
+        cu < self.cols as usize
+            && cv < self.rows as usize
+            && self
+                .front
+                .get(cv * self.cols as usize + cu)
+                .copied()
+                .unwrap_or(false)
     }
 
     /// Samples per square metre at one metre: divide by `z^2` for the density of samples on a fronto-parallel

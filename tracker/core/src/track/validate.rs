@@ -471,7 +471,7 @@ fn quality_checks(config: &TrackerConfig) -> [Check; 5] {
 }
 
 /// The checks of re-detection, in the order they are reported.
-fn redetect_checks(config: &TrackerConfig) -> [Check; 7] {
+fn redetect_checks(config: &TrackerConfig) -> [Check; 10] {
     let r = &config.redetect;
     [
         Check::new(
@@ -497,6 +497,21 @@ fn redetect_checks(config: &TrackerConfig) -> [Check; 7] {
         Check::new("redetect.min_support", r.min_support, Rule::NonNegative),
         Check::new("redetect.margin", r.margin, Rule::NonNegative),
         Check::new("redetect.min_score", r.min_score, Rule::Unit),
+        Check::new(
+            "redetect.pose_search_views",
+            r.pose_search_views as f64,
+            Rule::AtMost(1000.0, "must be at most 1000"),
+        ),
+        Check::new(
+            "redetect.pose_search_rolls",
+            r.pose_search_rolls as f64,
+            Rule::AtMost(64.0, "must be at most 64"),
+        ),
+        Check::new(
+            "redetect.pose_search_places",
+            r.pose_search_places as f64,
+            Rule::AtMost(16.0, "must be at most 16"),
+        ),
     ]
 }
 

@@ -38,7 +38,7 @@ pub struct QualityConfig {
     pub lost_after_ticks: u32,
     /// `lost` is also raised while the mean quality over the last `lost_mean_ticks` ticks is below this: a track
     /// that stays mediocre (an estimate off the object that the data half supports) without ever dropping below
-    /// `lost_below` for long.
+    /// `lost_below` for long. A re-detection restarts this window but not the run of `lost_after_ticks`.
     pub lost_mean_below: f32,
     /// Length of that window, ticks (0 disables the rule; 60 is 0.5 s at 120 Hz).
     pub lost_mean_ticks: u32,

@@ -4,6 +4,7 @@
 use super::setup::{TrackError, TrackedObject};
 use crate::track::config::TrackerConfig;
 use crate::track::object::ObjectTrack;
+use crate::track::pose_search::ShapeSamples;
 use scene::mesh::{Simplification, simplify_for_render};
 use scene::render::{Renderer, SceneObject};
 use std::sync::Arc;
@@ -18,7 +19,12 @@ pub(super) struct BuiltObjects {
     pub tracks: Vec<ObjectTrack>,
     /// Every object in the renderer's scene, at its first pose.
     pub scene: Vec<SceneObject>,
+    /// Each object's surface samples for re-detection's whole-pose search.
+    pub shapes: Vec<ShapeSamples>,
 }
+
+/// Points sampled on each mesh for the whole-pose search ([`crate::track::RedetectConfig::pose_search_views`]).
+const SHAPE_SAMPLES: usize = 150;
 
 /// Builds the tracks of `objects`, registering their render meshes with `renderer`. Refuses a first pose that is
 /// not finite or lies behind the camera, and a mesh the renderer cannot take.
@@ -32,6 +38,7 @@ pub(super) fn build_objects(
         render_meshes: Vec::with_capacity(objects.len()),
         tracks: Vec::with_capacity(objects.len()),
         scene: Vec::with_capacity(objects.len()),
+        shapes: Vec::with_capacity(objects.len()),
     };
     for (k, o) in objects.into_iter().enumerate() {
         check_first_pose(&o)?;
@@ -58,6 +65,10 @@ pub(super) fn build_objects(
                     object: o.name.clone(),
                     source,
                 })?;
+        built.shapes.push(ShapeSamples::new(
+            &o.mesh.sample_surface_seeded(SHAPE_SAMPLES, 0x5eed),
+            &aabb.center().coords,
+        ));
         built.tracks.push(ObjectTrack::new(
             label,
             diameter,

@@ -70,6 +70,7 @@ impl TickEngine {
             render_meshes,
             tracks,
             scene,
+            shapes,
         } = build_objects(&config, objects, renderer.as_mut())?;
         let renderers = Renderers::new(&config, tracks.len(), renderer);
         let probes = if config.redetect.enabled {
@@ -80,7 +81,7 @@ impl TickEngine {
             Vec::new()
         };
         let depth_cam = rig.depth.camera;
-        let redetection = Redetection::new(&config, &scene, &depth_cam, probes);
+        let redetection = Redetection::new(&config, &scene, &depth_cam, probes, shapes);
         let cam = rig.event_camera;
         // `I_t` is reconstructed only where something reads it: the event term needs the latest times alone.
         let surface = if config.intensity.always || config.intensity_term.weight > 0.0 {

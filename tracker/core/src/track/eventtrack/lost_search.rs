@@ -4,12 +4,14 @@
 
 use super::counters::TrackerCounters;
 use super::place_check::{PendingPlace, PlaceCheck, PlaceResult, ProbeSet};
+use super::pose_places::PoseSearch;
 use super::renderers::Renderers;
 use super::setup::TrackingRig;
 use crate::recon::EventSurface;
 use crate::track::TrackingState;
 use crate::track::config::{DepthUse, TrackerConfig};
 use crate::track::object::{ObjectTrack, TickInputs};
+use crate::track::pose_search::{HypothesisScoring, ShapeSamples};
 use crate::track::redetect::{Cluster, DepthBackground, RedetectConfig, cluster_centres};
 use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -50,6 +52,10 @@ pub(super) struct Redetection {
     pub(super) results: Vec<PlaceResult>,
     /// Scratch tracks for the checks, one set per renderer (thread).
     pub(super) probes: Vec<ProbeSet>,
+    /// The whole-pose search's shapes, orientations and scratch.
+    pub(super) pose_search: PoseSearch,
+    /// The whole-pose search's best poses for the object being planned.
+    pub(super) poses: Vec<Isometry3<f64>>,
 }
 
 /// The depth frame a search's places are checked against, and what the checks read beside it.
@@ -63,13 +69,14 @@ pub(super) struct SearchFrame<'a> {
 
 impl Search {
     /// Records the result of checking `place`; once the search is complete, returns the place to move the object
-    /// to if the best one scores at least `min_score` and beats the estimate's place by more than `margin`.
+    /// to, with its score, if the best one scores at least `min_score` and beats the estimate's place by more
+    /// than `margin`.
     fn record(
         &mut self,
         place: &PendingPlace,
         result: PlaceResult,
         cfg: &RedetectConfig,
-    ) -> Option<Isometry3<f64>> {
+    ) -> Option<(f64, Isometry3<f64>)> {
         self.remaining -= 1;
         if place.estimated {
             self.here = result.map_or(0.0, |(score, _)| score);
@@ -79,7 +86,7 @@ impl Search {
             self.best = Some((score, pose));
         }
         let (score, pose) = self.best.filter(|_| self.remaining == 0)?;
-        (score >= cfg.min_score && score > self.here + cfg.margin).then_some(pose)
+        (score >= cfg.min_score && score > self.here + cfg.margin).then_some((score, pose))
     }
 }
 
@@ -91,9 +98,11 @@ impl Redetection {
         scene: &[SceneObject],
         depth_cam: &PinholeCamera,
         probes: Vec<ProbeSet>,
+        shapes: Vec<ShapeSamples>,
     ) -> Self {
         let objects = scene.len();
-        let places = objects * (1 + 2 * config.redetect.candidates);
+        let places =
+            objects * (1 + 2 * config.redetect.candidates + config.redetect.pose_search_places);
         let cell = config.redetect.cell_px.max(1);
         Self {
             background: DepthBackground::new(cell, depth_cam.width, depth_cam.height),
@@ -110,6 +119,8 @@ impl Redetection {
             checks: Vec::with_capacity(places),
             results: Vec::with_capacity(places),
             probes,
+            pose_search: PoseSearch::new(&config.redetect, shapes),
+            poses: Vec::with_capacity(config.redetect.pose_search_places),
         }
     }
 
@@ -177,8 +188,8 @@ impl Redetection {
                 &mut r.seeds,
                 &mut r.centres,
             );
-            if !r.centres.is_empty() {
-                r.queue_places(k, o, &here, config, rig);
+            if !r.centres.is_empty() || r.pose_search.enabled() {
+                r.queue_places(k, o, &here, config, depth, rig);
             }
         }
     }
@@ -207,6 +218,7 @@ impl Redetection {
         o: &ObjectTrack,
         here: &Isometry3<f64>,
         config: &TrackerConfig,
+        depth: &DepthFrame,
         rig: &TrackingRig,
     ) {
         let cfg = config.redetect;
@@ -227,6 +239,34 @@ impl Redetection {
             start: *here,
             estimated: true,
         });
+        if self.pose_search.enabled() {
+            let z = o.model.center_at(here).z;
+            let noise = &config.depth_term;
+            let scoring = HypothesisScoring {
+                agree_m: 0.01 + 2.0 * (noise.sigma_0 + noise.sigma_z2 * z * z),
+                occluder_m: noise.occlusion_gap,
+                align_m: 0.25 * o.model.diameter,
+            };
+            self.poses.clear();
+            self.pose_search.best_places(
+                k,
+                &o.model,
+                here,
+                &self.centres,
+                depth,
+                &rig.depth,
+                &self.background,
+                &scoring,
+                &mut self.poses,
+            );
+            for start in &self.poses {
+                self.pending.push_back(PendingPlace {
+                    object: k,
+                    start: *start,
+                    estimated: false,
+                });
+            }
+        }
         for cluster in &self.centres {
             let centre = cluster.centre;
             if (centre - here_centre).norm() < 0.25 * o.model.diameter
@@ -332,9 +372,12 @@ impl Redetection {
             check.run_split(&r.checks, &mut r.results, &mut r.probes, renderers);
         for (place, result) in r.checks.iter().zip(&r.results) {
             let k = place.object;
-            if let Some(found) = r.searches[k].record(place, *result, &cfg) {
+            if let Some((score, found)) = r.searches[k].record(place, *result, &cfg) {
                 let o = &mut objects[k];
                 o.relocate_on(frame.depth, &frame.rig.depth, found, frame_t_us, config);
+                // The depth agreement the quality holds until the next frame is the new place's, not the one it
+                // left (its run of poor ticks goes on, so a place that does not hold still ends `lost`).
+                o.state.depth_fit = score.clamp(0.0, 1.0);
                 scene[k].pose = o.state.predicted;
             }
         }

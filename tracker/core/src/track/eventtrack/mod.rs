@@ -17,6 +17,7 @@ mod inner;
 mod lost_search;
 mod next_tick;
 mod place_check;
+mod pose_places;
 mod prefetch;
 mod renderers;
 mod retrack;

@@ -64,3 +64,34 @@ pub(super) fn assess(
     );
     state.reported.update(state.tracking, q.recover_ticks);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::track::estimate::TrackingState;
+
+    /// Assesses one tick whose estimate has quality `q` (depth agreement `q`, fully visible, full event support).
+    fn tick(state: &mut ObjectState, q: f64, config: &TrackerConfig) -> TrackingState {
+        state.depth_fit = q;
+        state.visibility = 1.0;
+        assess(state, true, None, Some(1.0), config);
+        state.tracking
+    }
+
+    fn state(config: &TrackerConfig) -> ObjectState {
+        let pose = Isometry3::translation(0.0, 0.0, 0.6);
+        ObjectState::new(pose, 0, config.quality.lost_mean_ticks as usize)
+    }
+
+    #[test]
+    fn moving_the_object_to_another_place_does_not_restart_the_way_to_lost() {
+        let config = TrackerConfig::default();
+        let q = config.quality;
+        let mut s = state(&config);
+        for _ in 1..q.lost_after_ticks {
+            assert_ne!(tick(&mut s, 0.1, &config), TrackingState::Lost);
+        }
+        s.relocate(Isometry3::translation(0.1, 0.0, 0.6));
+        assert_eq!(tick(&mut s, 0.1, &config), TrackingState::Lost);
+    }
+}

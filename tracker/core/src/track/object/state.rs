@@ -356,7 +356,9 @@ impl ObjectState {
         }
     }
 
-    /// Moves the object to `pose`: the motion estimate, the depth anchor and the pose history are dropped.
+    /// Moves the object to `pose`: the motion estimate, the depth anchor, the pose history and the recent mean
+    /// quality are dropped. The run of poor ticks goes on: a place found is a hypothesis, and an object moved from
+    /// one wrong place to another every depth frame still comes to say `lost` when its quality stays poor.
     pub fn relocate(&mut self, pose: Isometry3<f64>) {
         self.pose = normalise(pose);
         self.predicted = self.pose;
@@ -365,7 +367,6 @@ impl ObjectState {
         self.anchor = None;
         self.anchor_before = None;
         self.ranges.clear();
-        self.low_ticks = 0;
         self.recent_quality.clear();
         self.history.clear();
         self.redetections += 1;
