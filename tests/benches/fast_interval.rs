@@ -57,12 +57,30 @@ fn periods(rec: &Recording) -> Vec<Period> {
         .collect()
 }
 
+/// Hands period `p` to `tracker` as the runtime does (its events, its depth frame through `spare`, the tick,
+/// `prepare_next_tick`), the estimates into `out`.
+fn replay(
+    tracker: &mut EventTrack6d,
+    p: &Period,
+    spare: &mut Option<DepthFrame>,
+    out: &mut Vec<tracker::track::PoseEstimate>,
+) {
+    tracker.push_events(&p.events);
+    if let (Some(frame), Some(spare)) = (p.depth.as_ref(), spare.as_mut()) {
+        spare.clone_from(frame);
+        tracker.push_depth(p.tick.t_us, spare, DepthHandling::Now);
+    }
+    out.clear();
+    tracker.tick(&p.tick, out);
+    tracker.prepare_next_tick();
+}
+
 /// Replays `periods` of `rec` into trackers with `config`, timing each period's CPU.
 fn bench_periods(
     c: &mut Criterion,
     label: &str,
     rec: &Recording,
-    periods: &mut [Period],
+    periods: &[Period],
     config: &TrackerConfig,
 ) {
     let fresh =
@@ -88,16 +106,8 @@ fn bench_periods(
                     tracker = fresh();
                     next = 0;
                 }
-                let p = &mut periods[next];
                 let start = process_cpu_ns();
-                tracker.push_events(&p.events);
-                if let (Some(frame), Some(spare)) = (p.depth.as_ref(), spare.as_mut()) {
-                    spare.clone_from(frame);
-                    tracker.push_depth(p.tick.t_us, spare, DepthHandling::Now);
-                }
-                out.clear();
-                tracker.tick(&p.tick, &mut out);
-                tracker.prepare_next_tick();
+                replay(&mut tracker, &periods[next], &mut spare, &mut out);
                 total += process_cpu_ns().saturating_sub(start);
                 next += 1;
             }
@@ -109,9 +119,9 @@ fn bench_periods(
 fn fast_periods(c: &mut Criterion) {
     let dir = std::env::temp_dir().join("eventtrack6d-fast-period-bench");
     let rec = fast_mug_recording(&dir, 0.8);
-    let mut periods = periods(&rec);
-    bench_periods(c, "defaults", &rec, &mut periods, &TrackerConfig::default());
-    bench_periods(c, "ticks_only", &rec, &mut periods, &ticks_only());
+    let periods = periods(&rec);
+    bench_periods(c, "defaults", &rec, &periods, &TrackerConfig::default());
+    bench_periods(c, "ticks_only", &rec, &periods, &ticks_only());
 }
 
 /// The CPU of the depth-exposure periods while the mug is searched for: the tracker is re-seeded 15 cm
@@ -122,7 +132,7 @@ fn fast_periods(c: &mut Criterion) {
 fn search_periods(c: &mut Criterion) {
     let dir = std::env::temp_dir().join("eventtrack6d-fast-period-bench");
     let rec = fast_mug_recording(&dir, 0.8);
-    let mut periods = periods(&rec);
+    let periods = periods(&rec);
     let gt = rec.ground_truth.clone().expect("ground truth");
     let truth = tracker::recording::PoseTrack::from_samples(&gt, "mug");
     for (label, views) in [("pose_search", None), ("no_pose_search", Some(0))] {
@@ -160,17 +170,9 @@ fn search_periods(c: &mut Criterion) {
                         tracker = fresh();
                         next = 0;
                     }
-                    let p = &mut periods[next];
-                    let depth = next > 0 && p.depth.is_some();
+                    let depth = next > 0 && periods[next].depth.is_some();
                     let start = process_cpu_ns();
-                    tracker.push_events(&p.events);
-                    if let (Some(frame), Some(spare)) = (p.depth.as_ref(), spare.as_mut()) {
-                        spare.clone_from(frame);
-                        tracker.push_depth(p.tick.t_us, spare, DepthHandling::Now);
-                    }
-                    out.clear();
-                    tracker.tick(&p.tick, &mut out);
-                    tracker.prepare_next_tick();
+                    replay(&mut tracker, &periods[next], &mut spare, &mut out);
                     if depth {
                         total += process_cpu_ns().saturating_sub(start);
                         timed += 1;

@@ -97,12 +97,12 @@ fn run_late(recording: &Recording, config: TrackerConfig, latency_us: i64) -> Ru
     }
 }
 
-/// A mug translating at moderate speed for `seconds` (seed 11), generated into a temporary directory (kept
-/// alive by the returned guard).
-fn moving_mug(seconds: f64) -> (tempfile::TempDir, Recording) {
+/// `kind` translating at moderate speed for `seconds` (seed 11), generated into a temporary directory (kept alive
+/// by the returned guard).
+fn moving(kind: ObjectKind, seconds: f64) -> (tempfile::TempDir, Recording) {
     let dir = tempfile::tempdir().unwrap();
     let cfg = GenerateConfig::new(
-        ObjectSource::Library(ObjectKind::Mug),
+        ObjectSource::Library(kind),
         MotionProfile::Translation,
         SpeedLevel::Moderate,
         seconds,
@@ -111,6 +111,11 @@ fn moving_mug(seconds: f64) -> (tempfile::TempDir, Recording) {
     generate(&cfg, dir.path(), |_| {}).expect("generating the recording");
     let recording = Recording::open(dir.path()).expect("recording");
     (dir, recording)
+}
+
+/// The mug translating at moderate speed for `seconds`.
+fn moving_mug(seconds: f64) -> (tempfile::TempDir, Recording) {
+    moving(ObjectKind::Mug, seconds)
 }
 
 /// Ticks 12 to 40 (0.1 to 0.33 s): the object is still out of the frozen ROI's reach by itself.
@@ -251,22 +256,6 @@ fn rotation_error_deg(a: &Isometry3<f64>, b: &Isometry3<f64>) -> f64 {
     a.rotation.angle_to(&b.rotation).to_degrees()
 }
 
-/// A drill (no symmetry) translating at moderate speed for `seconds` (seed 11), generated into a temporary
-/// directory (kept alive by the returned guard).
-fn moving_drill(seconds: f64) -> (tempfile::TempDir, Recording) {
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = GenerateConfig::new(
-        ObjectSource::Library(ObjectKind::Drill),
-        MotionProfile::Translation,
-        SpeedLevel::Moderate,
-        seconds,
-        11,
-    );
-    generate(&cfg, dir.path(), |_| {}).expect("generating the recording");
-    let recording = Recording::open(dir.path()).expect("recording");
-    (dir, recording)
-}
-
 /// The rotation error of every tick of a run started with the drill 15 cm sideways and turned 120 degrees about
 /// the camera's x axis (its place and its orientation both lost), and the re-detections.
 fn run_turned(recording: &Recording, config: TrackerConfig) -> (Vec<f64>, u64) {
@@ -310,7 +299,8 @@ fn run_turned(recording: &Recording, config: TrackerConfig) -> (Vec<f64>, u64) {
 
 #[test]
 fn an_object_lost_turned_over_is_found_again_in_its_orientation_by_the_whole_pose_search() {
-    let (_dir, recording) = moving_drill(1.5);
+    // A drill has no symmetry: every turn shows.
+    let (_dir, recording) = moving(ObjectKind::Drill, 1.5);
     // Without the whole-pose search, a place is tried only in the estimate's orientation and with the drill's
     // long axis along the cluster's: the estimate stays turned.
     let mut without = TrackerConfig::default();
