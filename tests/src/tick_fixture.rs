@@ -7,7 +7,7 @@ use drivers::timeline::Tick;
 use hil_sim::generate::{Companion, GenerateConfig, ObjectSource, generate};
 use hil_sim::motion::{MotionProfile, SpeedLevel};
 use hil_sim::objects::ObjectKind;
-use nalgebra::Translation3;
+use nalgebra::{Isometry3, Translation3};
 use scene::render::Renderer;
 use std::path::Path;
 use tracker::recording::{PoseTrack, recording_ticks};
@@ -234,4 +234,45 @@ pub fn offline_pose_rows(
     )
     .expect("offline tracking");
     (rows, stats)
+}
+
+/// What a replay tracks with: configuration, renderer, and the depth frames' latency after their exposure
+/// (microseconds).
+pub type TrackerSetup = (TrackerConfig, Box<dyn Renderer + Send>, i64);
+
+/// Replays `recording` into a tracker of the object `name` alone, started at `start(true first pose, diameter in
+/// metres)`, calling `each_tick(truth, estimate)` at every tick; returns the tracker after the last tick.
+pub fn replay_started_off(
+    recording: &Recording,
+    name: &str,
+    start: impl FnOnce(Isometry3<f64>, f64) -> Isometry3<f64>,
+    (config, renderer, latency_us): TrackerSetup,
+    mut each_tick: impl FnMut(&Isometry3<f64>, &PoseEstimate),
+) -> EventTrack6d {
+    let gt = recording.ground_truth.clone().expect("ground truth");
+    let truth = PoseTrack::from_samples(&gt, name);
+    let ticks = recording_ticks(recording).expect("ticks");
+    let first = ticks[0].t_us;
+    let pose = truth.interpolated_at(first).expect("first pose");
+    let mut object = recording_object(recording, name, first, pose).expect("model");
+    object.first_pose = start(pose, object.diameter);
+    let rig = recording_rig(recording).expect("rig");
+    let mut tracker = EventTrack6d::new(config, rig, vec![object], renderer).expect("tracker");
+    let timing = OfflineTiming {
+        start_us: first,
+        depth_latency_us: latency_us,
+        depth_jitter_us: 0,
+    };
+    track_recording_timed(
+        recording,
+        &mut tracker,
+        timing,
+        |tick, estimates, _| {
+            let truth_now: Isometry3<f64> = truth.interpolated_at(tick.t_us).expect("truth");
+            each_tick(&truth_now, &estimates[0]);
+        },
+        |_| {},
+    )
+    .expect("replay");
+    tracker
 }

@@ -12,6 +12,7 @@ mod drive;
 mod estimate;
 mod eventtrack;
 mod fallback_check;
+mod foreground_map;
 mod hold;
 mod object;
 mod pose_search;

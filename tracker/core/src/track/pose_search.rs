@@ -5,6 +5,7 @@
 //! orientation converges near the hand or the wrong face.
 
 use crate::recon::DepthRig;
+use crate::track::foreground_map::ForegroundMap;
 use crate::track::redetect::DepthBackground;
 use drivers::recording::DepthFrame;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
@@ -200,6 +201,57 @@ impl DepthView<'_> {
     }
 }
 
+impl DepthView<'_> {
+    /// `pose` (event camera frame) moved across the depth camera's line of sight so that its visible samples land
+    /// on the foreground of `map`: by the mean way from the pixels of the samples off the foreground to their
+    /// nearest foreground cells, at those samples' mean depth (samples on the foreground stay). A pose half on a
+    /// thin object and half on the background beside it moves onto the object; a pose on the object with a few
+    /// samples off its edges all round barely moves. `None` when no visible sample projects into the frame or the
+    /// frame shows no foreground; `pose` itself when every visible sample is on the foreground.
+    pub fn pull_sideways(
+        &self,
+        shape: &ShapeSamples,
+        pose: &Isometry3<f64>,
+        map: &ForegroundMap,
+    ) -> Option<Isometry3<f64>> {
+        let depth_from_event = self.rig.event_from_depth.inverse();
+        let in_depth = depth_from_event * pose;
+        let (mut du, mut dv, mut z, mut n, mut seen) = (0.0, 0.0, 0.0, 0usize, false);
+        for (p, normal) in &shape.points {
+            let q = in_depth * p;
+            if (in_depth.rotation * normal).dot(&q.coords) >= 0.0 {
+                continue;
+            }
+            let Some(uv) = self.rig.camera.project(&q) else {
+                continue;
+            };
+            let Some((wu, wv)) = map.way_to_foreground(uv.x, uv.y) else {
+                continue;
+            };
+            seen = true;
+            if wu == 0.0 && wv == 0.0 {
+                continue;
+            }
+            du += wu;
+            dv += wv;
+            z += q.z;
+            n += 1;
+        }
+        if n == 0 {
+            return seen.then_some(*pose);
+        }
+        let n = n as f64;
+        let (du, dv, z) = (du / n, dv / n, z / n);
+        let cam = &self.rig.camera;
+        let shift = Vector3::new(du * z / cam.fx, dv * z / cam.fy, 0.0);
+        if !shift.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let moved = Translation3::from(shift) * in_depth;
+        Some(self.rig.event_from_depth * moved)
+    }
+}
+
 /// Keeps the `k` best of `hypotheses` by score (best first) in `best`, dropping one within `min_apart` of a
 /// better one: a place this close is where the refinement of the better one goes anyway.
 pub(crate) fn keep_best(
@@ -294,6 +346,78 @@ mod tests {
         }
     }
 
+    /// A 160 x 120 depth camera (300 px focal length) that is also the event camera, and the frame it takes of a
+    /// box of half sizes `h` turned by the Euler angles `euler` at (0.01, -0.02, 0.6) m, in front of a wall at 1 m.
+    fn box_scene(
+        h: Vector3<f64>,
+        euler: (f64, f64, f64),
+    ) -> (DepthRig, Isometry3<f64>, DepthFrame) {
+        let cam = PinholeCamera::new(300.0, 300.0, 79.5, 59.5, 160, 120).unwrap();
+        let rig = DepthRig {
+            camera: cam,
+            event_from_depth: Isometry3::identity(),
+        };
+        let truth = Isometry3::from_parts(
+            Translation3::new(0.01, -0.02, 0.6),
+            UnitQuaternion::from_euler_angles(euler.0, euler.1, euler.2),
+        );
+        let frame = frame_of_box(&cam, h, &truth);
+        (rig, truth, frame)
+    }
+
+    #[test]
+    fn a_pose_beside_a_thin_object_is_pulled_onto_it() {
+        // A marker-like stick, 16 mm thick, seen from 0.6 m in front of a wall at 1 m.
+        let h = Vector3::new(0.06, 0.008, 0.008);
+        let (rig, truth, frame) = box_scene(h, (0.2, 0.3, 0.4));
+        let cam = rig.camera;
+        let mut wall = frame.clone();
+        wall.depth_m.fill(1.0);
+        let mut background = DepthBackground::new(2, cam.width, cam.height);
+        background.update(&wall);
+        background.foreground(&frame, &rig, |_| 0.05, &mut Vec::new());
+        let mut map = ForegroundMap::default();
+        map.update(&background);
+        let view = DepthView {
+            frame: &frame,
+            rig: &rig,
+            background: Some(&background),
+        };
+        let shape = box_samples(h);
+        let scoring = HypothesisScoring {
+            agree_m: 0.01,
+            occluder_m: 0.025,
+            align_m: 0.05,
+        };
+        let mut scratch = Vec::new();
+        let c = Vector3::zeros();
+        // 25 mm beside it, across the stick: none of its surface on the stick.
+        let beside = Translation3::from(truth.rotation * Vector3::new(0.0, 0.025, 0.0)) * truth;
+        let before = view.score(&shape, &beside, &c, &scoring, &mut scratch);
+        let mut pulled = beside;
+        for _ in 0..3 {
+            pulled = view
+                .pull_sideways(&shape, &pulled, &map)
+                .expect("foreground");
+            pulled = view.score(&shape, &pulled, &c, &scoring, &mut scratch).pose;
+        }
+        let after = view.score(&shape, &pulled, &c, &scoring, &mut scratch);
+        let off = (pulled.translation.vector - truth.translation.vector).norm();
+        assert!(off < 0.006, "still {off} m off");
+        assert!(
+            after.score > before.score + 0.2,
+            "{} -> {}",
+            before.score,
+            after.score
+        );
+        // With nothing in front of the background there is nowhere to go.
+        let mut empty = DepthBackground::new(2, cam.width, cam.height);
+        empty.update(&wall);
+        empty.foreground(&wall, &rig, |_| 0.05, &mut Vec::new());
+        map.update(&empty);
+        assert!(view.pull_sideways(&shape, &beside, &map).is_none());
+    }
+
     #[test]
     fn the_lattice_covers_every_orientation() {
         let lattice = orientation_lattice(24, 6);
@@ -325,17 +449,8 @@ mod tests {
 
     #[test]
     fn the_true_pose_outscores_a_turned_or_moved_one_and_is_pulled_to_the_measured_range() {
-        let cam = PinholeCamera::new(300.0, 300.0, 79.5, 59.5, 160, 120).unwrap();
-        let rig = DepthRig {
-            camera: cam,
-            event_from_depth: Isometry3::identity(),
-        };
         let h = Vector3::new(0.06, 0.03, 0.015);
-        let truth = Isometry3::from_parts(
-            Translation3::new(0.01, -0.02, 0.6),
-            UnitQuaternion::from_euler_angles(0.4, 0.3, 0.2),
-        );
-        let frame = frame_of_box(&cam, h, &truth);
+        let (rig, truth, frame) = box_scene(h, (0.4, 0.3, 0.2));
         let view = DepthView {
             frame: &frame,
             rig: &rig,

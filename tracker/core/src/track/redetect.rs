@@ -49,9 +49,16 @@ pub struct RedetectConfig {
     /// Turns about the line of sight tried per direction of [`Self::pose_search_views`].
     pub pose_search_rolls: usize,
     /// The best poses of the whole-pose search checked as places (refined on depth and scored as any place),
-    /// besides the estimate's place and each cluster's own two. A search that does not fit in the ticks before the
-    /// next depth frame (`places_per_tick` per tick) is dropped unfinished and its places counted.
+    /// besides the estimate's place and each cluster's own two. An object's places beyond what the ticks until
+    /// the next depth frame can check (`places_per_tick` per tick, shared by the objects searched for) are left
+    /// out, the clusters' last first, and counted, so that every search completes.
     pub pose_search_places: usize,
+    /// Steps moving each of the whole-pose search's best coarse poses across the line of sight onto the
+    /// foreground nearest its silhouette, then scored as another candidate: a thin object (a marker, a spatula's
+    /// blade) is narrower than the search's sideways steps. 0 (the default) moves none: 2 lifted `fast-check`'s
+    /// `spatula-rotation-fast` from 5 to 31 ADD-S but lowered both fast suites' means by 1-3 points
+    /// (docs/history/tuning.md).
+    pub pose_search_pulls: usize,
 }
 
 impl Default for RedetectConfig {
@@ -69,6 +76,7 @@ impl Default for RedetectConfig {
             pose_search_views: 24,
             pose_search_rolls: 6,
             pose_search_places: 2,
+            pose_search_pulls: 0,
         }
     }
 }
@@ -152,6 +160,17 @@ impl DepthBackground {
                 .get(cv * self.cols as usize + cu)
                 .copied()
                 .unwrap_or(false)
+    }
+
+    /// The cells the latest [`Self::foreground`] found in front of the background (row-major), with the grid's
+    /// columns, rows and cell size in depth pixels.
+    pub fn front_cells(&self) -> (&[bool], usize, usize, u32) {
+        (
+            &self.front,
+            self.cols as usize,
+            self.rows as usize,
+            self.cell_px,
+        )
     }
 
     /// Samples per square metre at one metre: divide by `z^2` for the density of samples on a fronto-parallel

@@ -471,7 +471,7 @@ fn quality_checks(config: &TrackerConfig) -> [Check; 5] {
 }
 
 /// The checks of re-detection, in the order they are reported.
-fn redetect_checks(config: &TrackerConfig) -> [Check; 10] {
+fn redetect_checks(config: &TrackerConfig) -> [Check; 11] {
     let r = &config.redetect;
     [
         Check::new(
@@ -511,6 +511,11 @@ fn redetect_checks(config: &TrackerConfig) -> [Check; 10] {
             "redetect.pose_search_places",
             r.pose_search_places as f64,
             Rule::AtMost(16.0, "must be at most 16"),
+        ),
+        Check::new(
+            "redetect.pose_search_pulls",
+            r.pose_search_pulls as f64,
+            Rule::AtMost(8.0, "must be at most 8"),
         ),
     ]
 }

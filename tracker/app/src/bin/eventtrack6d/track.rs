@@ -302,7 +302,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     }
     if counters.redetect_places_dropped > 0 {
         eprintln!(
-            "{} re-detection places left unchecked: a newer depth frame arrived first ([redetect] places_per_tick)",
+            "{} re-detection places left unchecked: more than the ticks until the next depth frame could check ([redetect] places_per_tick, pose_search_places)",
             counters.redetect_places_dropped
         );
     }

@@ -35,7 +35,8 @@ pub struct TrackerCounters {
     pub redetections: u64,
     /// Re-detection places checked (each a depth-only refinement and two renders).
     pub redetect_places_checked: u64,
-    /// Re-detection places left unchecked because a newer depth frame replaced the one they were planned on.
+    /// Re-detection places left unchecked: a newer depth frame replaced the one they were planned on, or a
+    /// search planned more than the ticks until the next frame can check (the least likely left out).
     pub redetect_places_dropped: u64,
     /// Renders started at the end of a tick for the next one ([`crate::track::ExecutionConfig::prefetch_renders`]).
     pub renders_prefetched: u64,

@@ -321,6 +321,7 @@ impl TickEngine {
                 &self.objects,
                 t_us,
                 exposed_us,
+                dt_s,
             );
         }
         let frame = SearchFrame {

@@ -56,6 +56,10 @@ pub(super) struct Redetection {
     pub(super) pose_search: PoseSearch,
     /// The whole-pose search's best poses for the object being planned.
     pub(super) poses: Vec<Isometry3<f64>>,
+    /// The tick of the latest plan (microseconds), and the ticks between the two latest plans (0 until measured):
+    /// how many ticks a search has to check its places in.
+    planned_us: Option<i64>,
+    ticks_per_frame: usize,
 }
 
 /// The depth frame a search's places are checked against, and what the checks read beside it.
@@ -121,6 +125,8 @@ impl Redetection {
             probes,
             pose_search: PoseSearch::new(&config.redetect, shapes),
             poses: Vec::with_capacity(config.redetect.pose_search_places),
+            planned_us: None,
+            ticks_per_frame: 0,
         }
     }
 
@@ -132,7 +138,7 @@ impl Redetection {
         }
     }
 
-    /// At a depth frame exposed at `exposed_us` and used at the tick `t_us`: plans the search for every object
+    /// At a depth frame exposed at `exposed_us` and used at the tick `t_us` (`dt_s` after the one before): plans the search for every object
     /// that needs one (not `tracking`, and not merely partly hidden; see
     /// [`crate::track::object::ObjectState::needs_search`]): where it was estimated at the exposure (predicted,
     /// for a frame on time), then the object-sized clusters of foreground (with that orientation and with its
@@ -149,12 +155,28 @@ impl Redetection {
         objects: &[ObjectTrack],
         t_us: i64,
         exposed_us: i64,
+        dt_s: f64,
     ) {
         let cfg = config.redetect;
         let r = self;
         counters.redetect_places_dropped += r.pending.len() as u64;
         r.pending.clear();
         r.frame = Some((depth.index, exposed_us));
+        if let Some(previous) = r.planned_us
+            && t_us > previous
+            && dt_s > 0.0
+        {
+            let ticks = ((t_us - previous) as f64 * 1e-6 / dt_s).round();
+            if (1.0..=64.0).contains(&ticks) {
+                r.ticks_per_frame = ticks as usize;
+            }
+        }
+        r.planned_us = Some(t_us);
+        let searching = objects
+            .iter()
+            .filter(|o| o.state.needs_search(&config.quality) && t_us >= o.state.t_us)
+            .count();
+        let cap = r.places_per_object(config, searching);
         let at_frame = |o: &ObjectTrack| {
             if exposed_us < t_us {
                 o.state.history.at(exposed_us)
@@ -176,6 +198,7 @@ impl Redetection {
             };
             if !foreground_ready {
                 r.find_foreground(config, depth, rig);
+                r.pose_search.foreground_found(&r.background);
                 foreground_ready = true;
             }
             r.centres.clear();
@@ -190,8 +213,30 @@ impl Redetection {
             );
             if !r.centres.is_empty() || r.pose_search.enabled() {
                 r.queue_places(k, o, &here, config, depth, rig);
+                let queued = r.searches[k].remaining;
+                if queued > cap {
+                    // The least likely places (the clusters' last orientations) are the ones left out.
+                    r.pending.truncate(r.pending.len() - (queued - cap));
+                    r.searches[k].remaining = cap;
+                    counters.redetect_places_dropped += (queued - cap) as u64;
+                }
             }
         }
+    }
+
+    /// How many places each of `searching` objects may queue at a depth frame: as many as the ticks until the
+    /// next frame check (`places_per_tick` per tick, over all objects), so that every search completes; no limit
+    /// when all of a frame's places are checked at once, or before the ticks between two frames are known.
+    fn places_per_object(&self, config: &TrackerConfig, searching: usize) -> usize {
+        let per_tick = config.redetect.places_per_tick;
+        if per_tick == 0
+            || config.modalities.depth == DepthUse::DepthFramesOnly
+            || self.ticks_per_frame == 0
+        {
+            return usize::MAX;
+        }
+        // Each object keeps at least its estimate's place and one other.
+        (per_tick * self.ticks_per_frame / searching.max(1)).max(2)
     }
 
     /// The foreground of the latest depth frame against the learned background (the background caught up

@@ -3,6 +3,7 @@
 //! [`crate::track::RedetectConfig::pose_search_views`], at the estimate's place and at every cluster.
 
 use crate::recon::DepthRig;
+use crate::track::foreground_map::ForegroundMap;
 use crate::track::object::ObjectModel;
 use crate::track::pose_search::{
     DepthView, Hypothesis, HypothesisScoring, ShapeSamples, keep_best, orientation_lattice,
@@ -24,6 +25,9 @@ pub(super) struct PoseSearch {
     first_pass: Vec<ShapeSamples>,
     lattice: Vec<UnitQuaternion<f64>>,
     places: usize,
+    pulls: usize,
+    /// The way to the nearest foreground from every cell of the frame being searched.
+    foreground: ForegroundMap,
     kept: Vec<Hypothesis>,
     best: Vec<Hypothesis>,
     residuals: Vec<f64>,
@@ -46,9 +50,18 @@ impl PoseSearch {
             shapes,
             lattice,
             places,
+            pulls: cfg.pose_search_pulls,
+            foreground: ForegroundMap::default(),
             kept: Vec::with_capacity(FIRST_PASS_KEPT + 1),
             best: Vec::with_capacity(cfg.pose_search_places + 1),
             residuals: Vec::with_capacity(256),
+        }
+    }
+
+    /// Reads the foreground `background` found in the frame about to be searched.
+    pub(super) fn foreground_found(&mut self, background: &DepthBackground) {
+        if self.enabled() && self.pulls > 0 {
+            self.foreground.update(background);
         }
     }
 
@@ -121,6 +134,17 @@ impl PoseSearch {
             for offset in offsets(step) {
                 let moved = at(h.pose.rotation, &(centre + offset));
                 let scored = view.score(shape, &moved, &c, scoring, &mut self.residuals);
+                keep_best(&mut self.best, scored, self.places, &c, apart);
+            }
+            if self.pulls > 0 {
+                let mut pulled = h.pose;
+                for _ in 0..self.pulls {
+                    let Some(p) = view.pull_sideways(shape, &pulled, &self.foreground) else {
+                        break;
+                    };
+                    pulled = view.score(shape, &p, &c, scoring, &mut self.residuals).pose;
+                }
+                let scored = view.score(shape, &pulled, &c, scoring, &mut self.residuals);
                 keep_best(&mut self.best, scored, self.places, &c, apart);
             }
         }
