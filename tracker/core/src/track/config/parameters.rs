@@ -101,6 +101,12 @@ grouped_parameters! {
             /// first pose: on the `fast` suite they moved the exact first pose by 4.1 mm on average (up to 21 mm),
             /// against 1.3 mm on depth alone.
             events_at_first_pose: bool = false,
+            /// Whether, at a fresh depth frame, the refinement starts moved along the line of sight onto the surface
+            /// the frame measures, when most of the model's visible surface agrees on an offset beyond half the
+            /// depth term's `occlusion_gap` (within a diameter): the events barely see motion along the line of
+            /// sight, and by the first depth frame an object approaching fast is nearer than the estimate by more
+            /// than the depth term reaches (it takes a surface that much nearer for an occluder).
+            align_range_at_depth: bool = true,
             /// Most model surface samples per tick.
             max_surface_points: usize = 600,
             /// Most silhouette samples per tick.

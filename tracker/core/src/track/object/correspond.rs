@@ -1,12 +1,14 @@
 //! The correspond phase of one object's tick: this tick's depth registered and carried to the prediction, the
 //! events of its window binned and matched, the model view of its ROI render, and the pose the optimisation
-//! starts from (the prediction, moved by a late frame's check or by the outline's image shift the events show).
+//! starts from (the prediction, moved by a late frame's check or by the outline's image shift the events show, and
+//! at a depth frame onto the range it measures).
 
 use super::carried_depth::{capture_neighbourhood, carry_depth_from};
 use super::inputs::TickInputs;
 use super::late_depth::{carry_late_depth, register_late_depth};
 use super::model::ObjectModel;
 use super::motion::image_motion_direction;
+use super::range_align::aligned_range;
 use super::scratch::TickScratch;
 use super::start::{Start, TickDepth};
 use super::state::ObjectState;
@@ -174,6 +176,20 @@ pub(super) fn correspond(
         contrast_velocity,
         use_event_residuals,
     );
+    let pose = if depth.fresh && !late && config.correspond.align_range_at_depth {
+        aligned_range(
+            model,
+            &scratch.view,
+            &pose,
+            &roi_camera,
+            &scratch.depth_now,
+            config,
+            &mut scratch.range_offsets,
+        )
+        .unwrap_or(pose)
+    } else {
+        pose
+    };
     if depth.weight > 0.0 && !depth.fresh && !(depth.at_predicted && pose == predicted) {
         state
             .carried

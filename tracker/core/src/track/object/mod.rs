@@ -25,6 +25,7 @@ mod motion;
 mod optimise;
 mod placement;
 mod quality_window;
+mod range_align;
 mod range_track;
 mod safety_net;
 mod scratch;

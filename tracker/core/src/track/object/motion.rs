@@ -74,7 +74,13 @@ pub(super) fn record_estimate(
                 (inputs.t_us - t0) as f64 * 1e-6,
                 config.motion.velocity_smoothing,
             ),
-            _ => (state.pose, inputs.dt_s, config.motion.velocity_smoothing),
+            // Since the previous estimate: none at the first pose's own tick, whose refinement corrects the
+            // first pose rather than measuring a motion.
+            _ => (
+                state.pose,
+                (inputs.t_us - state.t_us) as f64 * 1e-6,
+                config.motion.velocity_smoothing,
+            ),
         },
     };
     if fresh_depth {

@@ -22,6 +22,8 @@ pub(crate) struct TickScratch {
     pub edges: EventEdges,
     /// The intensity term's matches.
     pub intensity_edges: IntensityEdges,
+    /// Per surface sample, measured minus model depth, metres ([`super::range_align::aligned_range`]).
+    pub range_offsets: Vec<f64>,
 }
 
 impl TickScratch {
@@ -46,6 +48,7 @@ impl TickScratch {
             },
             edges: EventEdges::default(),
             intensity_edges: IntensityEdges::default(),
+            range_offsets: Vec::with_capacity(config.correspond.max_surface_points),
         }
     }
 }
