@@ -287,6 +287,13 @@ mod tests {
     use super::*;
     use scene::geometry::PinholeCamera;
 
+    /// The scoring of the tests: agreement within 1 cm, an occluder 2.5 cm nearer, alignment within 5 cm.
+    const SCORING: HypothesisScoring = HypothesisScoring {
+        agree_m: 0.01,
+        occluder_m: 0.025,
+        align_m: 0.05,
+    };
+
     /// A box of half sizes `h` sampled on a grid of its faces, outward normals.
     fn box_samples(h: Vector3<f64>) -> ShapeSamples {
         let mut s = Vec::new();
@@ -384,11 +391,7 @@ mod tests {
             background: Some(&background),
         };
         let shape = box_samples(h);
-        let scoring = HypothesisScoring {
-            agree_m: 0.01,
-            occluder_m: 0.025,
-            align_m: 0.05,
-        };
+        let scoring = SCORING;
         let mut scratch = Vec::new();
         let c = Vector3::zeros();
         // 25 mm beside it, across the stick: none of its surface on the stick.
@@ -457,11 +460,7 @@ mod tests {
             background: None,
         };
         let shape = box_samples(h);
-        let scoring = HypothesisScoring {
-            agree_m: 0.01,
-            occluder_m: 0.025,
-            align_m: 0.05,
-        };
+        let scoring = SCORING;
         let mut scratch = Vec::new();
         let c = Vector3::zeros();
         let at_truth = view.score(&shape, &truth, &c, &scoring, &mut scratch);
@@ -517,7 +516,7 @@ mod tests {
             let frame = DepthFrame { index: 0, width, height, depth_m };
             let view = DepthView { frame: &frame, rig: &rig, background: None };
             let shape = box_samples(Vector3::new(0.05, 0.03, 0.02));
-            let scoring = HypothesisScoring { agree_m: 0.01, occluder_m: 0.025, align_m: 0.05 };
+            let scoring = SCORING;
             let t = if nan { f64::NAN } else { x };
             let pose = Isometry3::from_parts(
                 Translation3::new(t, y, z),
