@@ -138,13 +138,14 @@ impl Redetection {
         }
     }
 
-    /// At a depth frame exposed at `exposed_us` and used at the tick `t_us` (`dt_s` after the one before): plans the search for every object
-    /// that needs one (not `tracking`, and not merely partly hidden; see
+    /// At a depth frame exposed at `exposed_us` and used at the tick `t_us` (`dt_s` after the one before): plans
+    /// the search for every object that needs one (not `tracking`, and not merely partly hidden; see
     /// [`crate::track::object::ObjectState::needs_search`]): where it was estimated at the exposure (predicted,
     /// for a frame on time), then the object-sized clusters of foreground (with that orientation and with its
     /// longest axis along the cluster's). A late frame shows where the object was at its exposure, so it is
     /// searched for there; an object whose estimates do not reach back to the exposure is not searched for on
-    /// that frame. Places left over from the previous frame are dropped and counted.
+    /// that frame. Places left over from the previous frame are dropped and counted, and so are an object's places
+    /// beyond [`Self::places_per_object`].
     #[allow(clippy::too_many_arguments)]
     pub(super) fn plan(
         &mut self,
